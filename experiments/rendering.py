@@ -1,0 +1,89 @@
+"""Offscreen pictures of the room: a top-down snapshot and videos with the path drawn.
+
+MuJoCo reads MUJOCO_GL once, when dm_control is first imported, so a backend that
+imports but cannot make a context (EGL without a device, say) is only found out by
+trying. `choose_backend()` tries egl then osmesa in throw-away processes and
+remembers the first that renders.
+"""
+import os
+import subprocess
+import sys
+
+BACKENDS = ("egl", "osmesa")
+HEIGHT, WIDTH = 320, 480
+PATH_RGBA = (0.9, 0.15, 0.15, 1.0)
+
+_PROBE = """
+import tasks
+env = tasks.load("floating", seed=0)
+env.reset()
+assert env.physics.render(height=16, width=24, camera_id="top").mean() > 0
+env.close()
+"""
+
+
+class RenderingError(RuntimeError):
+    pass
+
+
+def choose_backend():
+    """The first of MUJOCO_GL (if set), egl, osmesa that renders a frame here."""
+    wanted = os.environ.get("MUJOCO_GL")
+    candidates = [wanted] if wanted and wanted not in BACKENDS else []
+    candidates += [b for b in ((wanted,) if wanted in BACKENDS else ()) + BACKENDS if b]
+    errors = []
+    for backend in dict.fromkeys(candidates):
+        env = dict(os.environ, MUJOCO_GL=backend)
+        proc = subprocess.run([sys.executable, "-c", _PROBE], env=env, capture_output=True,
+                              text=True, timeout=120)
+        if proc.returncode == 0:
+            return backend
+        last = (proc.stderr.strip().splitlines() or ["no output"])[-1]
+        errors.append(f"{backend}: {last}")
+    raise RenderingError("no OpenGL backend renders here (" + "; ".join(errors)
+                         + "); install Mesa's EGL or libosmesa6")
+
+
+def ensure_backend():
+    """Sets MUJOCO_GL to a working backend; call before dm_control is imported."""
+    if "dm_control" in sys.modules and os.environ.get("MUJOCO_GL") in BACKENDS:
+        return os.environ["MUJOCO_GL"]
+    os.environ["MUJOCO_GL"] = choose_backend()
+    return os.environ["MUJOCO_GL"]
+
+
+def frame(physics, path_xy=(), height=HEIGHT, width=WIDTH):
+    """A top-down frame; path_xy (paper units) is drawn as a line on the floor."""
+    from models import UNIT
+
+    def draw(_, scene):
+        import mujoco
+        pts = list(path_xy)
+        for (x0, y0), (x1, y1) in zip(pts[:-1], pts[1:]):
+            if scene.ngeom >= scene.maxgeom:
+                break
+            g = scene.geoms[scene.ngeom]
+            mujoco.mjv_initGeom(g, mujoco.mjtGeom.mjGEOM_LINE, [0, 0, 0], [0, 0, 0],
+                                [1, 0, 0, 0, 1, 0, 0, 0, 1], PATH_RGBA)
+            mujoco.mjv_connector(g, mujoco.mjtGeom.mjGEOM_LINE, 3.0,
+                                 [x0 * UNIT, y0 * UNIT, 0.01], [x1 * UNIT, y1 * UNIT, 0.01])
+            scene.ngeom += 1
+
+    return physics.render(height=height, width=width, camera_id="top",
+                          scene_callback=draw if len(path_xy) > 1 else None)
+
+
+def snapshot(path):
+    """Writes a PNG of the room with each robot at its (un-jittered) start, side by side."""
+    import imageio.v3 as iio
+    import numpy as np
+
+    import tasks
+    frames = []
+    for robot in tasks.ROBOTS:
+        env = tasks.load(robot, seed=0, start_jitter=False)
+        env.reset()
+        frames.append(frame(env.physics))
+        env.close()
+    iio.imwrite(path, np.concatenate(frames, axis=1))
+    return path
