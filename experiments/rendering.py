@@ -87,3 +87,31 @@ def snapshot(path):
         env.close()
     iio.imwrite(path, np.concatenate(frames, axis=1))
     return path
+
+
+def record(spec, path, *, frames=600, fps=30):
+    """Runs spec exactly as `ebrl run` does and writes an MP4 of it, from the top
+    camera, with the current trial's path drawn; at most `frames` frames."""
+    import imageio.v2 as imageio
+
+    from experiments import protocol
+    every = max(1, spec.steps // frames)
+    writer = imageio.get_writer(str(path), fps=fps, codec="libx264", quality=7,
+                                macro_block_size=16, ffmpeg_log_level="error")
+
+    def on_step(step, env, trace, trial_begin, start):
+        if step % every:
+            return
+        # Trial path: its start, then the positions since (decimated to bound the scene).
+        pts = trace[trial_begin:step + 1]
+        if trial_begin == step + 1 or len(pts) == 0:
+            pts = np.empty((0, 2))
+        pts = np.vstack([start, pts[:: max(1, len(pts) // 400)], pts[-1:]]) if len(pts) else [start]
+        writer.append_data(frame(env.physics, pts))
+
+    import numpy as np
+    try:
+        result = protocol.execute(spec, on_step=on_step)
+    finally:
+        writer.close()
+    return result

@@ -1,0 +1,1 @@
+"""The protocol runner, results on disk, reports, figures, videos and benchmarks."""

@@ -1,0 +1,199 @@
+"""The `ebrl` command (also `python -m experiments`): run, report, render, bench, demo."""
+import argparse
+import os
+import pathlib
+import sys
+
+from experiments import paper
+
+USAGE_ERROR = 2
+
+
+class _Parser(argparse.ArgumentParser):
+    """Bad arguments: one line on stderr and exit status 2, nothing written."""
+
+    def error(self, message):
+        self.exit(USAGE_ERROR, f"{self.prog}: error: {message}\n")
+
+
+def _fail(message):
+    print(f"ebrl: error: {message}", file=sys.stderr)
+    return USAGE_ERROR
+
+
+def parse_seeds(text):
+    """'0-49', '7' or '1,3,5' -> sorted list of seeds."""
+    seeds = set()
+    for part in text.split(","):
+        part = part.strip()
+        try:
+            if "-" in part:
+                lo, hi = (int(v) for v in part.split("-", 1))
+                if hi < lo:
+                    raise argparse.ArgumentTypeError(f"reversed seed range {part!r}")
+                seeds.update(range(lo, hi + 1))
+            else:
+                seeds.add(int(part))
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"bad seed range {text!r} (use e.g. 0-49)") from None
+    if not seeds:
+        raise argparse.ArgumentTypeError(f"empty seed range {text!r}")
+    if min(seeds) < 0:
+        raise argparse.ArgumentTypeError("seeds must be non-negative")
+    return sorted(seeds)
+
+
+def positive_int(text):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"must be positive, got {value}")
+    return value
+
+
+def _choice(valid):
+    def check(text):
+        if text not in valid:
+            raise argparse.ArgumentTypeError(f"unknown {text!r}; valid: {', '.join(valid)}")
+        return text
+    return check
+
+
+def _override(text):
+    """name=value for an agent parameter (sweeps), e.g. policy_threshold=0.05."""
+    import dataclasses
+
+    import ebrl
+    name, sep, value = text.partition("=")
+    fields = {f.name: f for f in dataclasses.fields(ebrl.Config)}
+    if not sep or name not in fields:
+        raise argparse.ArgumentTypeError(f"bad --set {text!r}; use NAME=VALUE with NAME one of "
+                                         + ", ".join(fields))
+    kind = type(getattr(ebrl.Config(), name))
+    try:
+        return name, kind(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"bad value for {name}: {value!r}") from None
+
+
+def build_parser():
+    p = _Parser(prog="ebrl", description=__doc__)
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    r = sub.add_parser("run", help="run the protocol (skips runs already on disk)")
+    r.add_argument("--robot", type=_choice(paper.ROBOTS + ("all",)), default="all")
+    r.add_argument("--condition", type=_choice(paper.CONDITIONS + ("all",)), default="all")
+    r.add_argument("--seeds", type=parse_seeds, default=list(range(paper.SEEDS)),
+                   help="e.g. 0-49 (default), 3, or 1,4,9")
+    r.add_argument("--steps", type=positive_int, default=None,
+                   help="agent steps per run (default: the paper's, "
+                        + ", ".join(f"{k} {v:,}" for k, v in paper.BUDGETS.items()) + ")")
+    r.add_argument("--workers", type=positive_int, default=os.cpu_count() or 1)
+    r.add_argument("--backend", type=_choice(("local", "ray")), default="local")
+    r.add_argument("--out", type=pathlib.Path, default=pathlib.Path("results"))
+    r.add_argument("--set", type=_override, action="append", default=[], metavar="NAME=VALUE",
+                   help="change an agent parameter from Table 1's (for sweeps)")
+    r.add_argument("--no-progress", action="store_true")
+
+    rep = sub.add_parser("report", help="rebuild summary.json, REPORT.md and figures")
+    rep.add_argument("dir", type=pathlib.Path)
+
+    v = sub.add_parser("render", help="an offscreen MP4 of one run")
+    v.add_argument("--robot", type=_choice(paper.ROBOTS), required=True)
+    v.add_argument("--condition", type=_choice(paper.CONDITIONS), required=True)
+    v.add_argument("--seed", type=int, required=True)
+    v.add_argument("--steps", type=positive_int, default=3000)
+    v.add_argument("--out", type=pathlib.Path, required=True)
+
+    b = sub.add_parser("bench", help="microseconds per agent step, by part")
+    b.add_argument("--steps", type=positive_int, default=3000)
+
+    d = sub.add_parser("demo", help="a quick protocol, its report and one video")
+    d.add_argument("--out", type=pathlib.Path, default=pathlib.Path("demo_results"))
+    d.add_argument("--workers", type=positive_int, default=os.cpu_count() or 1)
+    return p
+
+
+def cmd_run(args):
+    from experiments import report, results, runner
+    robots = paper.ROBOTS if args.robot == "all" else (args.robot,)
+    conditions = paper.CONDITIONS if args.condition == "all" else (args.condition,)
+    steps = args.steps or paper.BUDGETS
+    specs = runner.plan(robots, conditions, args.seeds, steps, args.set)
+    try:
+        ran = runner.run(specs, args.out, workers=args.workers, backend=args.backend,
+                         progress=not args.no_progress)
+        path = report.build(args.out)
+    except results.ResultsError as e:
+        return _fail(str(e))
+    print(f"{ran} runs made, {len(specs) - ran} already on disk; report: {path}")
+    return 0
+
+
+def cmd_report(args):
+    from experiments import report, results
+    if not args.dir.is_dir():
+        return _fail(f"no results folder at {args.dir}")
+    try:
+        path = report.build(args.dir)
+    except results.ResultsError as e:
+        return _fail(str(e))
+    print(f"report: {path}")
+    return 0
+
+
+def cmd_render(args):
+    from experiments import protocol, rendering
+    if args.out.suffix.lower() != ".mp4":
+        return _fail(f"--out must end in .mp4, got {args.out}")
+    if not args.out.parent.is_dir():
+        return _fail(f"no folder {args.out.parent} for --out")
+    try:
+        rendering.ensure_backend()
+    except rendering.RenderingError as e:
+        return _fail(str(e))
+    spec = protocol.RunSpec(args.robot, args.condition, args.seed, args.steps)
+    result = rendering.record(spec, args.out)
+    print(f"video: {args.out} ({len(result['trial_ends'])} goals in {args.steps} steps)")
+    return 0
+
+
+def cmd_bench(args):
+    from experiments import bench
+    bench.main(args.steps)
+    return 0
+
+
+def cmd_demo(args):
+    """A quick protocol: 6 seeds, a tenth of the paper's budgets, then report and video."""
+    from experiments import protocol, rendering, report, results, runner
+    budgets = {r: n // 10 for r, n in paper.BUDGETS.items()}
+    specs = runner.plan(paper.ROBOTS, paper.CONDITIONS, range(6), budgets)
+    print(f"demo: {len(specs)} runs (6 seeds x 2 robots x 2 conditions), budgets "
+          + ", ".join(f"{k} {v:,} steps" for k, v in budgets.items()) + f" -> {args.out}/")
+    try:
+        runner.run(specs, args.out, workers=args.workers)
+        path = report.build(args.out)
+        rendering.ensure_backend()
+    except (results.ResultsError, rendering.RenderingError) as e:
+        return _fail(str(e))
+    video = args.out / "two_wheel_avoidance_seed000.mp4"
+    rendering.record(protocol.RunSpec("two_wheel", "avoidance", 0, budgets["two_wheel"]), video)
+    print(f"report:  {path}\nfigures: {args.out / 'figures'}/\nvideo:   {video}")
+    return 0
+
+
+def main(argv=None):
+    args = build_parser().parse_args(argv)
+    try:
+        return {"run": cmd_run, "report": cmd_report, "render": cmd_render,
+                "bench": cmd_bench, "demo": cmd_demo}[args.command](args)
+    except KeyboardInterrupt:
+        print("ebrl: interrupted; finished runs are kept, rerun to resume", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

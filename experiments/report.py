@@ -1,0 +1,281 @@
+"""`ebrl report DIR`: summary.json, REPORT.md and the figures, from the run folders."""
+import pathlib
+
+import numpy as np
+
+from experiments import paper, results
+
+# The room as drawn in the figures, read from the MJCF so there is one source.
+_ROOM = None
+
+
+def room_rectangles():
+    """(field, obstacles, goal) in paper units, read from models/room.xml."""
+    global _ROOM
+    if _ROOM is None:
+        import mujoco
+
+        import models
+        m = mujoco.MjModel.from_xml_path(str(models.ROOM_FILE))
+        obstacles = []
+        for i in range(m.ngeom):
+            name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, i) or ""
+            if name.startswith("block_"):
+                c, h = m.geom_pos[i, :2] / models.UNIT, m.geom_size[i, :2] / models.UNIT
+                obstacles.append((c[0] - h[0], c[0] + h[0], c[1] - h[1], c[1] + h[1]))
+        floor = m.geom("floor")
+        c, h = floor.pos[:2] / models.UNIT, floor.size[:2] / models.UNIT
+        field = (c[0] - h[0], c[0] + h[0], c[1] - h[1], c[1] + h[1])
+        g = m.site("goal")
+        c, h = g.pos[:2] / models.UNIT, g.size[:2] / models.UNIT
+        _ROOM = (field, obstacles, (c[0] - h[0], c[0] + h[0], c[1] - h[1], c[1] + h[1]))
+    return _ROOM
+
+
+def draw_room(ax):
+    from matplotlib.patches import Rectangle
+    field, obstacles, goal = room_rectangles()
+    ax.add_patch(Rectangle((field[0], field[2]), field[1] - field[0], field[3] - field[2],
+                           fill=False, lw=2, ec="0.2"))
+    for x0, x1, y0, y1 in obstacles:
+        ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, color="0.55"))
+    ax.add_patch(Rectangle((goal[0], goal[2]), goal[1] - goal[0], goal[3] - goal[2],
+                           color="tab:green", alpha=0.4))
+    ax.set_xlim(field[0] - 1, field[1] + 1)
+    ax.set_ylim(field[2] - 1, field[3] + 1)
+    ax.set_aspect("equal")
+    ax.set_xticks([])
+    ax.set_yticks([])
+
+
+def _fmt(v, digits=0):
+    if v is None:
+        return "-"
+    return f"{v:,.{digits}f}"
+
+
+def _ci(ci, digits=0):
+    return "-" if ci is None else f"[{_fmt(ci[0], digits)}, {_fmt(ci[1], digits)}]"
+
+
+def comparison_rows(summary):
+    """One row per (group, figure): paper, ours, 95% CI, ratio, paper inside the CI."""
+    rows = []
+    for g in summary["groups"]:
+        ref = paper.RESULTS.get((g["robot"], g["condition"]))
+        for key, label, digits in (("first_trial_steps", "first-trial steps", 0),
+                                   ("steps_per_trial", "steps per trial", 0),
+                                   ("shrink", "shrink (per trial / first)", 2)):
+            ours = g[key]["mean"] if isinstance(g[key], dict) else g[key]
+            ci = g[key]["ci95"] if isinstance(g[key], dict) else g["shrink_ci95"]
+            sd = g[key]["sd"] if isinstance(g[key], dict) else None
+            theirs = None if ref is None else (ref[key]["mean"] if isinstance(ref[key], dict)
+                                               else ref[key])
+            rows.append({
+                "robot": g["robot"], "condition": g["condition"], "figure": label,
+                "paper": theirs, "paper_sd": ref[key].get("sd") if ref and isinstance(ref[key], dict) else None,
+                "ours": ours, "sd": sd, "ci95": ci, "digits": digits,
+                "ratio": (ours / theirs) if ours is not None and theirs else None,
+                "inside": (ci[0] <= theirs <= ci[1]) if ci and theirs is not None else None,
+            })
+    return rows
+
+
+def comparison_table(summary):
+    lines = ["| robot | condition | figure | paper | ours (sd) | ours 95% CI | ours / paper | paper in CI |",
+             "|---|---|---|---:|---:|---|---:|:-:|"]
+    for r in comparison_rows(summary):
+        d = r["digits"]
+        paper_txt = _fmt(r["paper"], d) + (f" ({_fmt(r['paper_sd'])})" if r["paper_sd"] else "")
+        ours_txt = _fmt(r["ours"], d) + (f" ({_fmt(r['sd'])})" if r["sd"] is not None else "")
+        inside = "-" if r["inside"] is None else ("yes" if r["inside"] else "no")
+        lines.append(f"| {r['robot']} | {r['condition']} | {r['figure']} | {paper_txt} | {ours_txt} "
+                     f"| {_ci(r['ci95'], d)} | {_fmt(r['ratio'], 2)} | {inside} |")
+    return "\n".join(lines)
+
+
+def goals_table(summary):
+    lines = ["| robot | condition | budget | reached first goal | goals min / median / max | runs below 30 goals |",
+             "|---|---|---:|---:|---|---:|"]
+    for g in summary["groups"]:
+        f = g["first_trial_steps"]
+        lines.append(f"| {g['robot']} | {g['condition']} | {_fmt(g['steps'])} | {f['reached']}/{g['seeds']} "
+                     f"| {g['goals']['min']} / {_fmt(g['goals']['median'], 1)} / {g['goals']['max']} "
+                     f"| {g['goals']['below_30']}/{g['seeds']} |")
+    return "\n".join(lines)
+
+
+def claims(summary):
+    """Section 3.6's qualitative claims, each with (claim, ours, verdict)."""
+    by = {(g["robot"], g["condition"]): g for g in summary["groups"]}
+    out = []
+    for robot, factor in (("two_wheel", 6087 / 956), ("floating", 11129 / 5433)):
+        r, a = by.get((robot, "random")), by.get((robot, "avoidance"))
+        if not (r and a):
+            continue
+        fr, fa = r["first_trial_steps"]["mean"], a["first_trial_steps"]["mean"]
+        pr, pa = r["steps_per_trial"]["mean"], a["steps_per_trial"]["mean"]
+        if fr and fa:
+            out.append((f"{robot}: avoidance cuts first-trial steps (paper {factor:.1f}x)",
+                        f"{fr / fa:.1f}x", fa < fr))
+        if pr and pa:
+            out.append((f"{robot}: avoidance cuts steps per trial",
+                        f"{pr / pa:.1f}x", pa < pr))
+        for g in (r, a):
+            ref = paper.RESULTS[(robot, g["condition"])]["shrink"]
+            if g["shrink"] is not None:
+                ci = g["shrink_ci95"]
+                out.append((f"{robot} {g['condition']}: learning shrinks trials (paper {ref:.0%})",
+                            f"{g['shrink']:.0%}" + (f" (95% CI {ci[0]:.0%}-{ci[1]:.0%})" if ci else ""),
+                            (ci[1] < 1.0) if ci else g["shrink"] < 1.0))
+    r, a = by.get(("two_wheel", "random")), by.get(("two_wheel", "avoidance"))
+    if r and a and r["steps"] == paper.BUDGETS["two_wheel"]:
+        out.append(("two_wheel random: most runs reach fewer than 30 goals in 30,000 steps (paper 43/50)",
+                    f"{r['goals']['below_30']}/{r['seeds']}", r["goals"]["below_30"] > r["seeds"] / 2))
+        out.append(("two_wheel avoidance: every run reaches at least 49 goals (paper min 49)",
+                    f"min {a['goals']['min']}", a["goals"]["min"] >= 49))
+    return out
+
+
+def claims_table(summary):
+    lines = ["| claim | ours | holds |", "|---|---|:-:|"]
+    for claim, ours, ok in claims(summary):
+        lines.append(f"| {claim} | {ours} | {'yes' if ok else 'no'} |")
+    return "\n".join(lines)
+
+
+# -- figures ----------------------------------------------------------------------
+def _plt():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def cumulative_reward_figure(root, runs, robot, path):
+    """Figures 3 and 5: cumulative reward against steps, every seed and the mean."""
+    plt = _plt()
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.6), sharey=True)
+    colours = {"random": "tab:orange", "avoidance": "tab:blue"}
+    for k, condition in enumerate(paper.CONDITIONS):
+        seeds = sorted(s for r, c, s in runs if (r, c) == (robot, condition))
+        if not seeds:
+            continue
+        steps = runs[(robot, condition, seeds[0])]["parameters"]["steps"]
+        grid = np.linspace(0, steps, 400)
+        curves = []
+        for s in seeds:
+            _, _, ends = results.load_trace(root, robot, condition, s)
+            axes[k].step(np.concatenate([[0], ends, [steps]]),
+                         np.concatenate([[0], np.arange(1, len(ends) + 1), [len(ends)]]),
+                         where="post", lw=0.6, alpha=0.5, color=colours[condition])
+            curves.append(np.searchsorted(ends, grid, side="right"))
+        mean = np.mean(curves, axis=0)
+        axes[k].plot(grid, mean, color="k", lw=1.5, label="mean")
+        axes[k].set_title(f"{'without' if condition == 'random' else 'with'} avoidance ({len(seeds)} seeds)")
+        axes[k].set_xlabel("steps")
+        axes[2].plot(grid, mean, color=colours[condition], lw=2,
+                     label=f"{'without' if condition == 'random' else 'with'} avoidance")
+    axes[0].set_ylabel("cumulative reward (goals)")
+    axes[2].set_title("comparison of means")
+    axes[2].set_xlabel("steps")
+    axes[2].legend()
+    fig.suptitle(f"{robot}: learning performance")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def typical_seed(runs, robot, condition):
+    """The seed with the median steps per trial among those with at least two goals."""
+    cands = sorted((run["metrics"]["steps_per_trial"], s) for (r, c, s), run in runs.items()
+                   if (r, c) == (robot, condition) and run["metrics"]["goals"] >= 2)
+    return cands[len(cands) // 2][1] if cands else None
+
+
+def traces_figure(root, runs, robot, path):
+    """Figures 2 and 4: typical successful traces (the last trial of the median seed)."""
+    plt = _plt()
+    fig, axes = plt.subplots(1, 2, figsize=(11, 3.9))
+    for ax, condition in zip(axes, paper.CONDITIONS):
+        draw_room(ax)
+        seed = typical_seed(runs, robot, condition)
+        if seed is None:
+            ax.set_title(f"{condition}: no seed with two goals")
+            continue
+        paths = results.trial_paths(*results.load_trace(root, robot, condition, seed))
+        first, last = paths[0], paths[-1]
+        ax.plot(first[:, 0], first[:, 1], lw=0.4, color="0.6", alpha=0.7,
+                label=f"first trial ({len(first) - 1} steps)")
+        ax.plot(last[:, 0], last[:, 1], lw=1.2, color="tab:red",
+                label=f"last trial ({len(last) - 1} steps)")
+        ax.plot(*last[0], "o", color="tab:blue")
+        ax.set_title(f"{'without' if condition == 'random' else 'with'} avoidance, seed {seed}")
+        ax.legend(loc="lower right", fontsize=7)
+    fig.suptitle(f"{robot}: typical traces")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def first_vs_learned_figure(summary, path):
+    """First-trial steps against learned steps per trial, ours (95% CI) and the paper's."""
+    plt = _plt()
+    groups = summary["groups"]
+    fig, ax = plt.subplots(figsize=(8, 3.8))
+    x = np.arange(len(groups))
+    for off, key, colour, label in ((-0.18, "first_trial_steps", "tab:gray", "first trial"),
+                                    (0.18, "steps_per_trial", "tab:purple", "steps per trial")):
+        means = [g[key]["mean"] or 0 for g in groups]
+        err = np.array([[m - (g[key]["ci95"] or [m, m])[0], (g[key]["ci95"] or [m, m])[1] - m]
+                        for m, g in zip(means, groups)]).T
+        ax.bar(x + off, means, 0.34, color=colour, label=f"ours: {label}", yerr=err, capsize=3)
+        ref = [paper.RESULTS.get((g["robot"], g["condition"]), {}).get(key, {}).get("mean")
+               for g in groups]
+        ax.plot(x + off, [np.nan if v is None else v for v in ref], "k_", ms=18, mew=2,
+                label=f"paper: {label}" if off < 0 else None)
+    ax.plot([], [], "k_", ms=18, mew=2, label="paper: steps per trial")
+    ax.set_yscale("log")
+    ax.set_xticks(x, [f"{g['robot']}\n{g['condition']}" for g in groups])
+    ax.set_ylabel("steps")
+    ax.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def build(root):
+    """Rebuilds summary.json, REPORT.md and the figures under root; returns REPORT.md's path."""
+    root = pathlib.Path(root)
+    runs = results.load_runs(root)
+    summary = results.summarize(runs)
+    figures = root / "figures"
+    figures.mkdir(exist_ok=True)
+    robots = [r for r in paper.ROBOTS if any(k[0] == r for k in runs)]
+    for robot in robots:
+        cumulative_reward_figure(root, runs, robot, figures / f"cumulative_reward_{robot}.png")
+        traces_figure(root, runs, robot, figures / f"traces_{robot}.png")
+    first_vs_learned_figure(summary, figures / "first_vs_learned.png")
+    extra = []
+    try:
+        from experiments import optimal
+        summary["optimal"] = optimal.yardstick(runs, root)
+        extra = ["", "## Against the optimal path", "", optimal.table(summary["optimal"])]
+    except ImportError:
+        pass
+    results.atomic_write(root / "summary.json", results.dumps(summary))
+    lines = [
+        f"# Report: {root}", "",
+        f"{len(runs)} runs. Section 3.6 of Unemi (2000) beside ours; 95% intervals are "
+        "percentile bootstraps over seeds.", "",
+        "## Section 3.6 figures", "", comparison_table(summary), "",
+        "## Goals within the budget", "", goals_table(summary), "",
+        "## Qualitative claims", "", claims_table(summary), *extra, "",
+        "## Figures", "",
+    ]
+    for robot in robots:
+        lines += [f"![{robot} cumulative reward](figures/cumulative_reward_{robot}.png)", "",
+                  f"![{robot} traces](figures/traces_{robot}.png)", ""]
+    lines += ["![first trial against learned](figures/first_vs_learned.png)", ""]
+    results.atomic_write(root / "REPORT.md", "\n".join(lines))
+    return root / "REPORT.md"

@@ -1,0 +1,220 @@
+"""Results on disk and the summary over seeds.
+
+DIR/<robot>/<condition>/seed_NNN/ holds config.json (every parameter, versions,
+git commit), trials.csv (one row per trial), trace.npz (positions, int16
+hundredths of a unit) and run.json, written last and atomically: a run folder
+without a complete run.json is unfinished, and a rerun redoes it from scratch.
+"""
+import csv
+import io
+import json
+import os
+import pathlib
+import platform
+import subprocess
+import tempfile
+
+import numpy as np
+
+from experiments import paper, protocol
+
+BOOTSTRAP_SAMPLES = 10_000
+BOOTSTRAP_SEED = 20000  # the paper's year: any fixed number makes summaries reproducible
+
+
+class ResultsError(RuntimeError):
+    """A results folder that cannot be used as it is; the message names the file."""
+
+
+# -- writing -----------------------------------------------------------------------
+def atomic_write(path, data):
+    """Writes bytes or text to path through a temporary file and a rename."""
+    path = pathlib.Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    mode = "wb" if isinstance(data, bytes) else "w"
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, mode) as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        pathlib.Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def dumps(obj):
+    return json.dumps(obj, indent=2, sort_keys=True) + "\n"
+
+
+def versions():
+    import dm_control
+    import mujoco
+    out = {"python": platform.python_version(), "numpy": np.__version__,
+           "mujoco": mujoco.__version__, "dm_control": getattr(dm_control, "__version__", "?")}
+    try:
+        commit = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True,
+                                cwd=pathlib.Path(__file__).parent, timeout=10).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+                               capture_output=True, text=True, timeout=10,
+                               cwd=pathlib.Path(__file__).parent).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        commit, dirty = "", ""
+    out["git_commit"] = (commit + ("+dirty" if dirty else "")) or "unknown"
+    return out
+
+
+def run_dir(root, spec):
+    return pathlib.Path(root) / spec.robot / spec.condition / f"seed_{spec.seed:03d}"
+
+
+def write_run(root, spec, result, versions_info):
+    """Writes one run's files; run.json goes last, so it marks the run complete."""
+    folder = run_dir(root, spec)
+    config = dict(spec.parameters(), versions=versions_info)
+    atomic_write(folder / "config.json", dumps(config))
+    ends = result["trial_ends"]
+    lengths = np.diff(np.concatenate([[0], ends]))
+    rows = io.StringIO()
+    w = csv.writer(rows, lineterminator="\n")
+    w.writerow(["trial", "steps", "cumulative_steps", "reached"])
+    for i, (n, c) in enumerate(zip(lengths, ends)):
+        w.writerow([i, int(n), int(c), 1])
+    unfinished = spec.steps - (int(ends[-1]) if len(ends) else 0)
+    if unfinished:
+        w.writerow([len(ends), unfinished, spec.steps, 0])
+    atomic_write(folder / "trials.csv", rows.getvalue())
+    buf = io.BytesIO()
+    np.savez_compressed(buf, trace=result["trace"], starts=result["starts"],
+                        trial_ends=ends, scale=protocol.TRACE_SCALE)
+    atomic_write(folder / "trace.npz", buf.getvalue())
+    run = {"status": "complete", "parameters": spec.parameters(),
+           "metrics": protocol.metrics(ends), "seconds": round(result["seconds"], 3),
+           "memory_decisions": result["memory_decisions"]}
+    atomic_write(folder / "run.json", dumps(run))
+    return run
+
+
+# -- reading -----------------------------------------------------------------------
+def read_run_json(path):
+    """The run.json at path, or ResultsError naming the file when it is damaged."""
+    try:
+        run = json.loads(pathlib.Path(path).read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise ResultsError(f"{path} is corrupted ({type(e).__name__}); "
+                           "delete its run folder to rerun it") from None
+    if not isinstance(run, dict) or run.get("status") != "complete" or not isinstance(
+            run.get("metrics"), dict) or not isinstance(run.get("parameters"), dict):
+        raise ResultsError(f"{path} is corrupted (not a complete run record); "
+                           "delete its run folder to rerun it")
+    return run
+
+
+def existing(root, spec):
+    """'done' if a matching complete run is on disk, 'missing' if it must run.
+
+    Raises ResultsError when the folder holds a damaged run.json or a complete run
+    made with other parameters (never overwritten: use another --out)."""
+    path = run_dir(root, spec) / "run.json"
+    if not path.exists():
+        return "missing"
+    run = read_run_json(path)
+    if run["parameters"] != json.loads(json.dumps(spec.parameters())):
+        raise ResultsError(f"{path} holds a run made with other parameters "
+                           f"(steps {run['parameters'].get('steps')}); use another --out")
+    return "done"
+
+
+def load_runs(root):
+    """Every complete run under root, as (robot, condition, seed) -> run.json dict."""
+    root = pathlib.Path(root)
+    if not root.is_dir():
+        raise ResultsError(f"no results folder at {root}")
+    runs = {}
+    for path in sorted(root.glob("*/*/seed_*/run.json")):
+        run = read_run_json(path)
+        p = run["parameters"]
+        runs[(p["robot"], p["condition"], p["seed"])] = run
+    if not runs:
+        raise ResultsError(f"no complete runs under {root}")
+    return runs
+
+
+def load_trace(root, robot, condition, seed):
+    with np.load(pathlib.Path(root) / robot / condition / f"seed_{seed:03d}" / "trace.npz") as z:
+        scale = float(z["scale"])
+        return z["trace"] / scale, z["starts"] / scale, z["trial_ends"]
+
+
+def trial_paths(trace, starts, trial_ends):
+    """The path of each completed trial, as (n, 2) arrays in units."""
+    paths, begin = [], 1
+    for i, end in enumerate(trial_ends):
+        paths.append(np.vstack([starts[i], trace[begin:end + 1]]))
+        begin = end + 1
+    return paths
+
+
+# -- summary -----------------------------------------------------------------------
+def bootstrap_ci(values, rng, stat=np.mean):
+    """95% percentile bootstrap interval of stat over values (None if < 2 values)."""
+    values = np.asarray(values, dtype=np.float64)
+    if len(values) < 2:
+        return None
+    idx = rng.integers(0, len(values), size=(BOOTSTRAP_SAMPLES, len(values)))
+    stats = stat(values[idx], axis=1)
+    lo, hi = np.percentile(stats, [2.5, 97.5])
+    return [float(lo), float(hi)]
+
+
+def _stats(values, rng):
+    v = np.asarray(values, dtype=np.float64)
+    if not len(v):
+        return {"mean": None, "sd": None, "ci95": None}
+    return {"mean": float(v.mean()), "sd": float(v.std(ddof=1)) if len(v) > 1 else 0.0,
+            "ci95": bootstrap_ci(v, rng)}
+
+
+def summarize(runs):
+    """summary.json's content from load_runs()' runs. Deterministic for the same runs."""
+    groups = []
+    keys = sorted({(r, c) for r, c, _ in runs},
+                  key=lambda k: (paper.ROBOTS.index(k[0]) if k[0] in paper.ROBOTS else 9,
+                                 paper.CONDITIONS.index(k[1]) if k[1] in paper.CONDITIONS else 9))
+    for robot, condition in keys:
+        rng = np.random.default_rng(BOOTSTRAP_SEED)
+        seeds = sorted(s for r, c, s in runs if (r, c) == (robot, condition))
+        ms = [runs[(robot, condition, s)]["metrics"] for s in seeds]
+        steps = sorted({runs[(robot, condition, s)]["parameters"]["steps"] for s in seeds})
+        first = [m["first_trial_steps"] for m in ms if m["first_trial_steps"] is not None]
+        per_trial = [m["steps_per_trial"] for m in ms if m["steps_per_trial"] is not None]
+        goals = [m["goals"] for m in ms]
+        f = dict(_stats(first, rng), reached=len(first))
+        p = dict(_stats(per_trial, rng), seeds=len(per_trial))
+        shrink = (p["mean"] / f["mean"]) if f["mean"] and p["mean"] is not None else None
+        shrink_ci = None
+        if len(first) > 1 and len(per_trial) > 1:
+            # Resample seeds that reached the goal at least once, keeping pairs together.
+            pairs = np.array([[m["first_trial_steps"], m["steps_per_trial"]] for m in ms
+                              if m["first_trial_steps"] is not None], dtype=np.float64)
+            idx = rng.integers(0, len(pairs), size=(BOOTSTRAP_SAMPLES, len(pairs)))
+            ratios = pairs[idx, 1].mean(axis=1) / pairs[idx, 0].mean(axis=1)
+            shrink_ci = [float(x) for x in np.percentile(ratios, [2.5, 97.5])]
+        groups.append({
+            "robot": robot, "condition": condition,
+            "steps": steps[0] if len(steps) == 1 else steps,
+            "seeds": len(seeds),
+            "first_trial_steps": f,
+            "steps_per_trial": p,
+            "shrink": shrink, "shrink_ci95": shrink_ci,
+            "goals": {"min": int(min(goals)), "median": float(np.median(goals)),
+                      "max": int(max(goals)), "mean": float(np.mean(goals)),
+                      "below_30": int(sum(g < 30 for g in goals))},
+            "memory_decision_rate": float(np.mean([
+                runs[(robot, condition, s)]["memory_decisions"]
+                / runs[(robot, condition, s)]["parameters"]["steps"] for s in seeds])),
+        })
+    return {"groups": groups,
+            "bootstrap": {"samples": BOOTSTRAP_SAMPLES, "seed": BOOTSTRAP_SEED,
+                          "interval": "95% percentile, resampling seeds"}}
