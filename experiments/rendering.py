@@ -58,16 +58,18 @@ def frame(physics, path_xy=(), height=HEIGHT, width=WIDTH):
 
     def draw(_, scene):
         import mujoco
+        import numpy as np
         pts = list(path_xy)
         for (x0, y0), (x1, y1) in zip(pts[:-1], pts[1:]):
             if scene.ngeom >= scene.maxgeom:
                 break
-            g = scene.geoms[scene.ngeom]
-            mujoco.mjv_initGeom(g, mujoco.mjtGeom.mjGEOM_LINE, [0, 0, 0], [0, 0, 0],
-                                [1, 0, 0, 0, 1, 0, 0, 0, 1], PATH_RGBA)
+            scene.ngeom += 1  # scene.geoms exposes the first ngeom entries
+            g = scene.geoms[scene.ngeom - 1]
+            mujoco.mjv_initGeom(g, mujoco.mjtGeom.mjGEOM_LINE, np.zeros(3), np.zeros(3),
+                                np.eye(3).ravel(), np.array(PATH_RGBA, dtype=np.float32))
             mujoco.mjv_connector(g, mujoco.mjtGeom.mjGEOM_LINE, 3.0,
-                                 [x0 * UNIT, y0 * UNIT, 0.01], [x1 * UNIT, y1 * UNIT, 0.01])
-            scene.ngeom += 1
+                                 np.array([x0 * UNIT, y0 * UNIT, 0.01]),
+                                 np.array([x1 * UNIT, y1 * UNIT, 0.01]))
 
     return physics.render(height=height, width=width, camera_id="top",
                           scene_callback=draw if len(path_xy) > 1 else None)

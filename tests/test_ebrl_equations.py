@@ -1,0 +1,138 @@
+"""Each paper equation against a case computed by hand."""
+import math
+
+import numpy as np
+import pytest
+
+import ebrl
+from ebrl import agent as agent_mod
+from ebrl import intrinsic
+
+
+def test_eq1_recall_weight_moves_alpha_of_the_way():
+    # W = 0.2, S = 0.8, alpha = 0.5: 0.2 + 0.5 * (0.8 - 0.2) = 0.5
+    assert agent_mod.eq1(0.2, 0.8, 0.5) == pytest.approx(0.5)
+    assert agent_mod.eq1(0.9, 0.1, 0.25) == pytest.approx(0.7)
+
+
+def test_eq2_by_hand():
+    # x = (1, 2), y = (0, 4), V = (1, 4): sum (1/1 + 4/4) = 2, 1/(2n) = 1/4 -> 1 - sqrt(0.5)
+    s = ebrl.similarity([1.0, 2.0], [[0.0, 4.0], [1.0, 2.0]], [1.0, 4.0])
+    assert s[0] == pytest.approx(1 - math.sqrt(0.5))
+    assert s[1] == pytest.approx(1.0)
+
+
+def test_eq3_eq4_weighted_modalities_by_hand():
+    x = np.array([0.0, 0.0, 1.0])
+    y = np.array([[1.0, 1.0, 3.0]])
+    v = np.array([1.0, 1.0, 2.0])
+    # group A = (0, 1): sum = 2, n = 2 -> S'_A = 1 - sqrt(2/4) ; group B = (2): (2^2)/2 = 2, n = 1 -> 1 - sqrt(1)
+    s_a, s_b = 1 - math.sqrt(0.5), 0.0
+    s = ebrl.similarity(x, y, v, groups=[[0, 1], [2]], weights=[0.7, 0.3])
+    assert s[0] == pytest.approx((0.7 * s_a + 0.3 * s_b) / 1.0)
+
+
+def test_fast_similarity_equals_reference():
+    rng = np.random.default_rng(0)
+    ag = ebrl.Agent(ebrl.Config(memory_size=64), 10, 2, intrinsic.RandomWalk(2),
+                    groups=[np.arange(8), np.arange(8, 10)], group_weights=[0.7, 0.3], seed=0)
+    for _ in range(100):
+        ag.act(rng.random(10))
+        ag.learn(0.0)
+    x = rng.random(10)
+    stored = ag._x[: ag.size]
+    want = ebrl.similarity(x, stored, ag.variance, [np.arange(8), np.arange(8, 10)], [0.7, 0.3])
+    np.testing.assert_allclose(ag._similarities(x), want, atol=1e-4)
+
+
+def test_eq5_measure_is_min_of_weight_and_utility():
+    np.testing.assert_allclose(agent_mod.eq5(np.array([0.9, 0.3, 0.5]), np.array([0.1, 0.8, 0.6])),
+                               [0.1, 0.3, 0.5])
+
+
+def _agent(**kw):
+    return ebrl.Agent(ebrl.Config(**kw), 2, 1, lambda r, rng: np.array([-0.5]), seed=0)
+
+
+def test_eq6_utilities_discount_along_the_episode_and_stop_at_cutoff():
+    ag = _agent(memory_size=16, recall_size=2, discount=0.5, utility_cutoff=0.2)
+    for t in range(4):
+        ag.act(np.array([t, -t], dtype=float))
+        ag.learn(1.0 if t == 3 else 0.0, last=t == 3)
+    # newest 1, then 0.5, 0.25; 0.125 < cutoff 0.2 stays 0
+    np.testing.assert_allclose(ag.utility, [0.0, 0.25, 0.5, 1.0])
+
+
+def test_eq7_reliability_along_backward_links_both_signs():
+    ag = _agent(memory_size=16, recall_size=2, time_discount=0.5, reliability_rate=0.5,
+                exploration_rate=0.0)
+    for t in range(3):  # one episode of 3 elements, rewarded: utilities > 0
+        ag.act(np.array([t, 0.0]))
+        ag.learn(1.0 if t == 2 else 0.0, last=t == 2)
+    before = ag.reliability.copy()  # 1 * 0.5^3, 0.5^2, 0.5^1 after the decays
+    np.testing.assert_allclose(before, [0.125, 0.25, 0.5])
+    # Next trial: the input equals element 1, so memory acts as element 1 did.
+    ag.act(np.array([1.0, 0.0]))
+    assert ag.used_memory
+    referred = int(ag._referred)
+    ag.learn(1.0, last=True)
+    r = ag.reliability
+    # element 1 and, back along its links, element 0: R + 0.5 * 1 * (1 - R), then the
+    # step's decay (x 0.5). E.g. element 1: (0.25 + 0.5 * 0.75) * 0.5 = 0.3125.
+    assert referred == 1
+    for j, r0 in ((1, before[1]), (0, before[0])):
+        assert r[j] == pytest.approx((r0 + 0.5 * (1 - r0)) * 0.5), j
+    assert r[1] == pytest.approx(0.3125)
+    assert r[2] == pytest.approx(before[2] * 0.5)  # not on the chain: decayed only
+    # Negative reward: R + rho * r * R.
+    ag2 = _agent(memory_size=16, recall_size=2, time_discount=0.5, exploration_rate=0.0)
+    for t in range(2):
+        ag2.act(np.array([t, 0.0]))
+        ag2.learn(1.0 if t == 1 else 0.0, last=t == 1)
+    ag2.act(np.array([0.0, 0.0]))
+    rel = ag2.reliability.copy()
+    j = int(ag2._referred)
+    ag2.learn(-1.0)
+    assert ag2.reliability[j] == pytest.approx(rel[j] * (1 - 0.5) * 0.5)
+
+
+def test_policy_threshold_and_empty_table_use_the_fallback():
+    ag = _agent(memory_size=8, recall_size=2, exploration_rate=0.0, policy_threshold=10.0)
+    a = ag.act(np.array([0.0, 0.0]))  # empty memory: fallback
+    assert not ag.used_memory and a[0] == -0.5
+    ag.learn(1.0, last=True)  # utility 1 stored
+    ag.act(np.array([0.0, 0.0]))
+    assert not ag.used_memory  # measure 1 < threshold 10
+
+
+def test_eq8_two_wheel_avoidance_by_hand():
+    assert intrinsic.avoid_two_wheel([1, 0, 0, 0, 0, 0, 0]) == pytest.approx(1 / 6)
+    assert intrinsic.avoid_two_wheel([0, 0, 1, 0, 0, 0, 0]) == pytest.approx(3 / 6)
+    assert intrinsic.avoid_two_wheel([0, 0, 0, 0, 0, 0.5, 0]) == pytest.approx(-2 * 0.5 / 6)
+    assert intrinsic.avoid_two_wheel([0.3, 0.2, 0.9, 1, 0.9, 0.2, 0.3]) == pytest.approx(0.0)
+
+
+def test_eq9_eq10_floating_avoidance_by_hand():
+    # Obstacle west only: b_h = 0.5 * 1 = 0.5 -> (0.5 - 0.25) / 0.75 = 1/3; b_v = 0
+    np.testing.assert_allclose(intrinsic.avoid_floating([0, 0, 0, 0, 1, 0, 0, 0]), [1 / 3, 0])
+    # North and north-east: b_h = 0.25 * (-1) = -0.25 -> (-0.25 + 0.25)/0.75 = 0 (edge of the dead zone)
+    # b_v = 0.5 * (0 - 1) + 0.25 * (0 - 1) = -0.75 -> (-0.75 + 0.25) / 0.75 = -2/3
+    np.testing.assert_allclose(intrinsic.avoid_floating([0, 1, 1, 0, 0, 0, 0, 0]), [0, -2 / 3])
+    # Inside the dead zone: "not changed" = zero acceleration.
+    np.testing.assert_allclose(intrinsic.avoid_floating([0.2, 0, 0, 0, 0, 0, 0, 0]), [0, 0])
+    # Full push from the south-west corner.
+    np.testing.assert_allclose(intrinsic.avoid_floating([0, 0, 0, 1, 1, 1, 1, 1]),
+                               [(0.5 + 0.25 * 1 - 0.25) / 0.75, (0.5 + 0.25 * 1 - 0.25) / 0.75])
+
+
+def test_random_action_is_clipped_gaussian_sd_half():
+    rng = np.random.default_rng(0)
+    a = np.array([intrinsic.random_action(rng, 1)[0] for _ in range(20000)])
+    assert a.min() >= -1 and a.max() <= 1 and (np.abs(a) == 1).mean() > 0.03  # ~4.6% clipped
+    assert abs(a.mean()) < 0.02 and 0.45 < a.std() < 0.5
+    fb = intrinsic.fallback_for("two_wheel", "avoidance")
+    near_left = np.array([1, 1, 1, 0, 0, 0, 0.0])
+    acts = np.array([fb(near_left, rng)[0] for _ in range(5000)])
+    assert 0.75 < np.isclose(acts, 1.0).mean() < 0.85  # eq 8 gives 1.0 80% of the time
+    with pytest.raises(ValueError, match="condition"):
+        intrinsic.fallback_for("two_wheel", "fuzzy")

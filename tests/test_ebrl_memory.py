@@ -1,0 +1,68 @@
+"""The memory's invariants under many stores and forgettings."""
+import numpy as np
+import pytest
+
+import ebrl
+from ebrl import intrinsic
+
+
+def chains_are_consistent(ag):
+    nxt, prv = ag._next, ag._prev
+    for k in range(ag.size):
+        if nxt[k] >= 0:
+            assert prv[nxt[k]] == k
+        if prv[k] >= 0:
+            assert nxt[prv[k]] == k
+    # No cycles: walking back from any element ends.
+    for k in range(ag.size):
+        seen, j = 0, k
+        while j >= 0:
+            j = prv[j]
+            seen += 1
+            assert seen <= ag.size
+
+
+@pytest.mark.parametrize("groups", [None, [np.arange(3), np.arange(3, 5)]])
+def test_invariants_under_random_episodes(groups):
+    rng = np.random.default_rng(1)
+    cfg = ebrl.Config(memory_size=32, recall_size=4, exploration_rate=0.3)
+    ag = ebrl.Agent(cfg, 5, 1, intrinsic.RandomWalk(1), groups=groups,
+                    group_weights=None if groups is None else [0.7, 0.3], seed=2)
+    for step in range(3000):
+        ag.act(rng.random(5) * [1, 1, 1, 3, 0.1])
+        last = rng.random() < 0.03
+        ag.learn(1.0 if last else 0.0, last)
+        assert ag.size <= cfg.memory_size
+        if step % 97 == 0:
+            chains_are_consistent(ag)
+            stored = ag._x[: ag.size]
+            np.testing.assert_allclose(ag.variance, np.maximum(stored.var(axis=0), 1e-6), rtol=1e-6)
+            np.testing.assert_allclose(ag._aug[:5, : ag.size].T, stored, rtol=1e-6)
+            table, _ = ag.recall_table()
+            assert len(set(table.tolist())) == len(table) <= cfg.recall_size
+            assert np.all(ag.reliability > 0) and np.all(ag.reliability <= 1.0)
+    assert ag.size == cfg.memory_size
+
+
+def test_forgetting_takes_the_least_reliable_and_splices_links():
+    cfg = ebrl.Config(memory_size=4, recall_size=1, time_discount=0.5, exploration_rate=0.0)
+    ag = ebrl.Agent(cfg, 1, 1, lambda r, rng: np.zeros(1), seed=0)
+    for t in range(4):
+        ag.act(np.array([float(t)]))
+        ag.learn(0.0)
+    # one episode 0 -> 1 -> 2 -> 3; element 0 is oldest, least reliable.
+    ag.act(np.array([9.0]))
+    ag.learn(0.0)
+    assert ag._x[0, 0] == 9.0  # slot 0 reused for the new element
+    assert ag._prev[1] == -1 and ag._next[3] == 0 and ag._prev[0] == 3
+    np.testing.assert_allclose(ag.variance, np.var([9.0, 1, 2, 3]))
+
+
+def test_cost_is_flat_and_memory_capped_over_long_runs():
+    ag = ebrl.Agent(ebrl.Config(memory_size=64, recall_size=7), 3, 1, intrinsic.RandomWalk(1), seed=0)
+    rng = np.random.default_rng(0)
+    for step in range(20000):
+        ag.act(rng.random(3))
+        ag.learn(1.0 if step % 300 == 299 else 0.0, step % 300 == 299)
+    assert ag.size == 64 and ag.steps == 20000
+    assert np.isfinite(ag.reliability).all() and (ag.reliability > 0).all()
