@@ -110,6 +110,18 @@ def build_parser():
     b = sub.add_parser("bench", help="microseconds per agent step, by part")
     b.add_argument("--steps", type=positive_int, default=3000)
 
+    w = sub.add_parser("sweep", help="the protocol at several values of one agent parameter")
+    w.add_argument("--param", default="policy_threshold")
+    w.add_argument("--values", default="0,0.01,0.05,0.1,0.2",
+                   help="comma-separated values (default: %(default)s)")
+    w.add_argument("--robot", type=_choice(paper.ROBOTS + ("all",)), default="all")
+    w.add_argument("--condition", type=_choice(paper.CONDITIONS + ("all",)), default="all")
+    w.add_argument("--seeds", type=parse_seeds, default=list(range(20)))
+    w.add_argument("--steps", type=positive_int, default=None)
+    w.add_argument("--workers", type=positive_int, default=os.cpu_count() or 1)
+    w.add_argument("--out", type=pathlib.Path, default=pathlib.Path("sweeps"))
+    w.add_argument("--no-progress", action="store_true")
+
     d = sub.add_parser("demo", help="a quick protocol, its report and one video")
     d.add_argument("--out", type=pathlib.Path, default=pathlib.Path("demo_results"))
     d.add_argument("--workers", type=positive_int, default=os.cpu_count() or 1)
@@ -166,6 +178,32 @@ def cmd_bench(args):
     return 0
 
 
+def cmd_sweep(args):
+    from experiments import report, results, runner
+    try:
+        values = [_override(f"{args.param}={v}") for v in args.values.split(",") if v.strip()]
+    except argparse.ArgumentTypeError as e:
+        return _fail(str(e))
+    if not values:
+        return _fail("--values is empty")
+    robots = paper.ROBOTS if args.robot == "all" else (args.robot,)
+    conditions = paper.CONDITIONS if args.condition == "all" else (args.condition,)
+    plans = [(args.out / f"{args.param}_{v}", runner.plan(robots, conditions, args.seeds,
+                                                         args.steps or paper.BUDGETS, [(n, v)]))
+             for n, v in values]
+    try:
+        for folder, specs in plans:  # refuse damaged or mismatched folders before running any
+            runner.pending(folder, specs)
+        for folder, specs in plans:
+            runner.run(specs, folder, workers=args.workers, progress=not args.no_progress)
+            report.build(folder)
+        path = report.sweep_table(args.out, args.param, [(v, f) for (_, v), (f, _) in zip(values, plans)])
+    except results.ResultsError as e:
+        return _fail(str(e))
+    print(f"sweep: {path}")
+    return 0
+
+
 def cmd_demo(args):
     """A quick protocol: 6 seeds, a tenth of the paper's budgets, then report and video."""
     from experiments import protocol, rendering, report, results, runner
@@ -189,7 +227,7 @@ def main(argv=None):
     args = build_parser().parse_args(argv)
     try:
         return {"run": cmd_run, "report": cmd_report, "render": cmd_render,
-                "bench": cmd_bench, "demo": cmd_demo}[args.command](args)
+                "bench": cmd_bench, "sweep": cmd_sweep, "demo": cmd_demo}[args.command](args)
     except KeyboardInterrupt:
         print("ebrl: interrupted; finished runs are kept, rerun to resume", file=sys.stderr)
         return 130

@@ -44,7 +44,17 @@ class RunSpec:
             "steps": self.steps,
             "agent": dataclasses.asdict(self.agent_config()),
             "task": task_parameters(),
+            "model_sha256": model_digest(self.robot),
         }
+
+
+def model_digest(robot):
+    """A digest of the composed MJCF, so results made with another model never match."""
+    import hashlib
+
+    import models
+    xml, _ = models.compose(robot)
+    return hashlib.sha256(xml.encode()).hexdigest()[:16]
 
 
 def task_parameters():

@@ -279,3 +279,20 @@ def build(root):
     lines += ["![first trial against learned](figures/first_vs_learned.png)", ""]
     results.atomic_write(root / "REPORT.md", "\n".join(lines))
     return root / "REPORT.md"
+
+
+def sweep_table(out, param, folders):
+    """SWEEP.md under out: each group's figures at every value of param."""
+    lines = [f"# Sweep over {param}", "",
+             "| " + param + " | robot | condition | seeds | first-trial steps | steps per trial (95% CI) "
+             "| shrink | goals min / median |", "|---:|---|---|---:|---:|---|---:|---|"]
+    for value, folder in folders:
+        s = results.summarize(results.load_runs(folder))
+        for g in s["groups"]:
+            p = g["steps_per_trial"]
+            lines.append(f"| {value} | {g['robot']} | {g['condition']} | {g['seeds']} "
+                         f"| {_fmt(g['first_trial_steps']['mean'])} | {_fmt(p['mean'])} {_ci(p['ci95'])} "
+                         f"| {_fmt(g['shrink'], 2)} | {g['goals']['min']} / {_fmt(g['goals']['median'], 1)} |")
+    path = pathlib.Path(out) / "SWEEP.md"
+    results.atomic_write(path, "\n".join(lines) + "\n")
+    return path

@@ -1,0 +1,198 @@
+"""The optimal path as a yardstick for learned trials (issue: "no learned path was optimal").
+
+Geometry: the shortest collision-free path of the robot's centre from the nominal
+start to the goal square, in the room inflated by the robot's radius (rounded
+corners, approximated by points on the arc), by Dijkstra over a visibility graph.
+
+Steps under each robot's action limits, noise-free:
+- two_wheel: a step turns t <= 1 rad and moves 2 (1 - t) units, so moving L units while
+  turning Theta radians in all takes at least L / 2 + Theta steps: ceil(L / 2 + Theta)
+  along the shortest path (Theta includes turning from the start heading).
+- floating: each axis accelerates by at most 0.2 units/step per step, so along a unit
+  direction u up to 0.2 / max(|ux|, |uy|). Stopping at every corner, a segment of L
+  units takes 2 ceil(sqrt(L / a)) steps (accelerate then brake). That plan is feasible,
+  so it bounds the fewest steps from above; ramming a wall to stop could save a few.
+"""
+import heapq
+import math
+
+import numpy as np
+
+ARC_POINTS = 6  # per rounded corner
+
+
+def _segment_box_distance(p, q, box):
+    """Distance between segment pq and the axis-aligned box (x0, x1, y0, y1)."""
+    x0, x1, y0, y1 = box
+    # Intersection: Liang-Barsky clip.
+    d = q - p
+    t0, t1 = 0.0, 1.0
+    for pk, qk in ((-d[0], p[0] - x0), (d[0], x1 - p[0]), (-d[1], p[1] - y0), (d[1], y1 - p[1])):
+        if abs(pk) < 1e-12:
+            if qk < 0:
+                break
+        else:
+            t = qk / pk
+            if pk < 0:
+                t0 = max(t0, t)
+            else:
+                t1 = min(t1, t)
+    else:
+        if t0 <= t1:
+            return 0.0
+
+    def point_box(pt):
+        dx = max(x0 - pt[0], 0.0, pt[0] - x1)
+        dy = max(y0 - pt[1], 0.0, pt[1] - y1)
+        return math.hypot(dx, dy)
+
+    def point_segment(c):
+        L2 = float(d @ d)
+        t = 0.0 if L2 == 0 else min(max(float((c - p) @ d) / L2, 0.0), 1.0)
+        return float(np.linalg.norm(p + t * d - c))
+
+    corners = [np.array(c) for c in ((x0, y0), (x0, y1), (x1, y0), (x1, y1))]
+    return min([point_box(p), point_box(q)] + [point_segment(c) for c in corners])
+
+
+def shortest_path(start, field, obstacles, goal, radius):
+    """(length, points) of the shortest path of a disc of `radius` from start into goal."""
+    fx0, fx1, fy0, fy1 = field[0] + radius, field[1] - radius, field[2] + radius, field[3] - radius
+    eps = 1e-6
+    start = np.asarray(start, dtype=float)
+
+    def free(p, q):
+        if min(p[0], q[0]) < fx0 - eps or max(p[0], q[0]) > fx1 + eps:
+            return False
+        if min(p[1], q[1]) < fy0 - eps or max(p[1], q[1]) > fy1 + eps:
+            return False
+        return all(_segment_box_distance(p, q, b) >= radius - 1e-4 for b in obstacles)
+
+    nodes = [start]
+    for x0, x1, y0, y1 in obstacles:
+        for (cx, cy, a0) in ((x0, y0, math.pi), (x1, y0, 1.5 * math.pi), (x1, y1, 0.0),
+                             (x0, y1, 0.5 * math.pi)):
+            r = radius / math.cos(math.pi / 4 / ARC_POINTS) + 1e-3  # polygon outside the arc
+            for k in range(ARC_POINTS + 1):
+                a = a0 + (math.pi / 2) * k / ARC_POINTS
+                pt = np.array([cx + r * math.cos(a), cy + r * math.sin(a)])
+                if fx0 <= pt[0] <= fx1 and fy0 <= pt[1] <= fy1:
+                    nodes.append(pt)
+    gx0, gx1, gy0, gy1 = goal[0], min(goal[1], fx1), goal[2], min(goal[3], fy1)
+
+    def to_goal(p):
+        q = np.array([min(max(p[0], gx0), gx1), min(max(p[1], gy0), gy1)])
+        return q if free(p, q) else None
+
+    dist = {0: 0.0}
+    prev = {}
+    heap = [(0.0, 0)]
+    best, best_end = math.inf, None
+    done = set()
+    while heap:
+        d, i = heapq.heappop(heap)
+        if i in done or d >= best:
+            continue
+        done.add(i)
+        q = to_goal(nodes[i])
+        if q is not None and d + np.linalg.norm(q - nodes[i]) < best:
+            best, best_end = d + float(np.linalg.norm(q - nodes[i])), (i, q)
+        for j, pt in enumerate(nodes):
+            if j in done or j == i:
+                continue
+            nd = d + float(np.linalg.norm(pt - nodes[i]))
+            if nd < dist.get(j, math.inf) and free(nodes[i], pt):
+                dist[j], prev[j] = nd, i
+                heapq.heappush(heap, (nd, j))
+    i, q = best_end
+    path = [q]
+    while True:
+        path.append(nodes[i])
+        if i == 0:
+            break
+        i = prev[i]
+    return best, np.array(path[::-1])
+
+
+def two_wheel_steps(path, heading=0.0):
+    """ceil(L / 2 + total turning) along the path, from the start heading."""
+    seg = np.diff(path, axis=0)
+    seg = seg[np.linalg.norm(seg, axis=1) > 1e-9]
+    angles = np.arctan2(seg[:, 1], seg[:, 0])
+    turns = np.abs(np.angle(np.exp(1j * np.diff(np.concatenate([[heading], angles])))))
+    return int(math.ceil(np.linalg.norm(seg, axis=1).sum() / 2.0 + turns.sum() - 1e-9))
+
+
+CORNER = math.radians(45)  # the floating plan stops where the path bends more than this
+
+
+def floating_steps(path, max_acceleration=0.2):
+    """Stop-at-every-corner bang-bang plan: sum of 2 ceil(sqrt(L / a)) over the legs
+    between bends of more than CORNER (the arc points around a corner are one bend)."""
+    seg = np.diff(path, axis=0)
+    seg = seg[np.linalg.norm(seg, axis=1) > 1e-9]
+    legs, current, heading = [], np.zeros(2), None
+    for d in seg:
+        angle = math.atan2(d[1], d[0])
+        if heading is not None and abs(math.remainder(angle - heading, 2 * math.pi)) > CORNER:
+            legs.append(current)
+            current, heading = np.zeros(2), angle
+        current = current + d
+        heading = math.atan2(current[1], current[0]) if heading is None else heading
+    legs.append(current)
+    steps = 0
+    for d in legs:
+        length = float(np.linalg.norm(d))
+        a = max_acceleration / max(abs(d[0]), abs(d[1])) * length
+        steps += 2 * math.ceil(math.sqrt(length / a) - 1e-9)
+    return steps
+
+
+def optimal(robot):
+    """{'length', 'steps', 'path'} for robot from the nominal start, in paper units."""
+    from experiments.report import room_rectangles
+    from tasks import navigation
+    field, obstacles, goal = room_rectangles()
+    import tasks
+    env = tasks.load(robot, seed=0)
+    radius = env.physics.robot_radius
+    env.close()
+    length, path = shortest_path(navigation.START[:2], field, obstacles, goal, radius)
+    steps = two_wheel_steps(path, navigation.START[2]) if robot == "two_wheel" else floating_steps(path)
+    return {"length": length, "steps": steps, "path": path}
+
+
+def yardstick(runs, root=None):
+    """Per group: optimal steps beside the best, median-last and mean learned trials."""
+    out = []
+    cache = {}
+    for robot, condition in sorted({(r, c) for r, c, _ in runs}):
+        if robot not in cache:
+            cache[robot] = optimal(robot)
+        best = cache[robot]
+        ms = [run["metrics"] for (r, c, _), run in runs.items() if (r, c) == (robot, condition)]
+        mins = [m["min_trial_steps"] for m in ms if m["min_trial_steps"] is not None]
+        lasts = [m["last_trial_steps"] for m in ms if m["last_trial_steps"] is not None]
+        per = [m["steps_per_trial"] for m in ms if m["steps_per_trial"] is not None]
+        out.append({
+            "robot": robot, "condition": condition,
+            "optimal_length": round(best["length"], 2), "optimal_steps": best["steps"],
+            "best_trial_steps": min(mins) if mins else None,
+            "median_last_trial_steps": float(np.median(lasts)) if lasts else None,
+            "mean_steps_per_trial": float(np.mean(per)) if per else None,
+            "seeds_with_optimal_trial": int(sum(m <= best["steps"] for m in mins)),
+        })
+    return out
+
+
+def table(rows):
+    lines = ["| robot | condition | shortest path (units) | optimal steps | best trial | median last trial | "
+             "mean steps per trial / optimal | seeds with an optimal trial |",
+             "|---|---|---:|---:|---:|---:|---:|---:|"]
+    for r in rows:
+        ratio = (r["mean_steps_per_trial"] / r["optimal_steps"]) if r["mean_steps_per_trial"] else None
+        lines.append(f"| {r['robot']} | {r['condition']} | {r['optimal_length']:.1f} | {r['optimal_steps']} "
+                     f"| {r['best_trial_steps'] if r['best_trial_steps'] is not None else '-'} "
+                     f"| {r['median_last_trial_steps'] if r['median_last_trial_steps'] is not None else '-'} "
+                     f"| {'-' if ratio is None else f'{ratio:.1f}x'} | {r['seeds_with_optimal_trial']} |")
+    return "\n".join(lines)
