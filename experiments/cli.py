@@ -99,6 +99,10 @@ def build_parser():
 
     rep = sub.add_parser("report", help="rebuild summary.json, REPORT.md and figures")
     rep.add_argument("dir", type=pathlib.Path)
+    rep.add_argument("--results", type=pathlib.Path, default=None, metavar="RESULTS.md",
+                     help="also regenerate the tables of this page (between its markers), "
+                          "copy the figures to --figures and summary.json beside it")
+    rep.add_argument("--figures", type=pathlib.Path, default=pathlib.Path("docs/figures"))
 
     v = sub.add_parser("render", help="an offscreen MP4 of one run")
     v.add_argument("--robot", type=_choice(paper.ROBOTS), required=True)
@@ -150,6 +154,8 @@ def cmd_report(args):
         return _fail(f"no results folder at {args.dir}")
     try:
         path = report.build(args.dir)
+        if args.results is not None:
+            print(f"published: {report.publish(args.dir, args.results, args.figures)}")
     except results.ResultsError as e:
         return _fail(str(e))
     print(f"report: {path}")
@@ -204,12 +210,18 @@ def cmd_sweep(args):
     return 0
 
 
+DEMO_BUDGETS = {"two_wheel": 10_000, "floating": 20_000}
+DEMO_SEEDS = 6
+DEMO_VIDEO_STEPS = 3_000
+
+
 def cmd_demo(args):
-    """A quick protocol: 6 seeds, a tenth of the paper's budgets, then report and video."""
+    """A quick protocol: 6 seeds at a third / a fifth of the paper's budgets, then the
+    report and one video."""
     from experiments import protocol, rendering, report, results, runner
-    budgets = {r: n // 10 for r, n in paper.BUDGETS.items()}
-    specs = runner.plan(paper.ROBOTS, paper.CONDITIONS, range(6), budgets)
-    print(f"demo: {len(specs)} runs (6 seeds x 2 robots x 2 conditions), budgets "
+    budgets = DEMO_BUDGETS
+    specs = runner.plan(paper.ROBOTS, paper.CONDITIONS, range(DEMO_SEEDS), budgets)
+    print(f"demo: {len(specs)} runs ({DEMO_SEEDS} seeds x 2 robots x 2 conditions), budgets "
           + ", ".join(f"{k} {v:,} steps" for k, v in budgets.items()) + f" -> {args.out}/")
     try:
         runner.run(specs, args.out, workers=args.workers)
@@ -218,7 +230,7 @@ def cmd_demo(args):
     except (results.ResultsError, rendering.RenderingError) as e:
         return _fail(str(e))
     video = args.out / "two_wheel_avoidance_seed000.mp4"
-    rendering.record(protocol.RunSpec("two_wheel", "avoidance", 0, budgets["two_wheel"]), video)
+    rendering.record(protocol.RunSpec("two_wheel", "avoidance", 0, DEMO_VIDEO_STEPS), video)
     print(f"report:  {path}\nfigures: {args.out / 'figures'}/\nvideo:   {video}")
     return 0
 

@@ -9,9 +9,11 @@ Steps under each robot's action limits, noise-free:
   turning Theta radians in all takes at least L / 2 + Theta steps: ceil(L / 2 + Theta)
   along the shortest path (Theta includes turning from the start heading).
 - floating: each axis accelerates by at most 0.2 units/step per step, so along a unit
-  direction u up to 0.2 / max(|ux|, |uy|). Stopping at every corner, a segment of L
-  units takes 2 ceil(sqrt(L / a)) steps (accelerate then brake). That plan is feasible,
-  so it bounds the fewest steps from above; ramming a wall to stop could save a few.
+  direction u up to 0.2 / max(|ux|, |uy|). The fewest steps lie between two bounds:
+  from below, accelerating at the diagonal's 0.2 sqrt(2) all the way (no braking: the
+  trial ends on entering the goal) covers a n (n + 1) / 2 units in n steps; from above,
+  stopping at every corner, a leg of L units takes 2 ceil(sqrt(L / a)) steps
+  (accelerate then brake), a feasible plan. Ramming walls to stop lies in between.
 """
 import heapq
 import math
@@ -148,8 +150,15 @@ def floating_steps(path, max_acceleration=0.2):
     return steps
 
 
+def floating_lower_bound(length, max_acceleration=0.2):
+    """Fewest n with a n (n + 1) / 2 >= length at a = max_acceleration sqrt(2)."""
+    a = max_acceleration * math.sqrt(2.0)
+    return int(math.ceil((-1 + math.sqrt(1 + 8 * length / a)) / 2 - 1e-9))
+
+
 def optimal(robot):
-    """{'length', 'steps', 'path'} for robot from the nominal start, in paper units."""
+    """{'length', 'steps', 'steps_lower', 'path'} for robot from the nominal start, in
+    paper units; steps is the feasible plan, steps_lower a bound no trial can beat."""
     from experiments.report import room_rectangles
     from tasks import navigation
     field, obstacles, goal = room_rectangles()
@@ -158,8 +167,11 @@ def optimal(robot):
     radius = env.physics.robot_radius
     env.close()
     length, path = shortest_path(navigation.START[:2], field, obstacles, goal, radius)
-    steps = two_wheel_steps(path, navigation.START[2]) if robot == "two_wheel" else floating_steps(path)
-    return {"length": length, "steps": steps, "path": path}
+    if robot == "two_wheel":
+        steps = lower = two_wheel_steps(path, navigation.START[2])
+    else:
+        steps, lower = floating_steps(path), floating_lower_bound(length)
+    return {"length": length, "steps": steps, "steps_lower": lower, "path": path}
 
 
 def yardstick(runs, root=None):
@@ -177,22 +189,26 @@ def yardstick(runs, root=None):
         out.append({
             "robot": robot, "condition": condition,
             "optimal_length": round(best["length"], 2), "optimal_steps": best["steps"],
+            "optimal_steps_lower": best["steps_lower"],
             "best_trial_steps": min(mins) if mins else None,
             "median_last_trial_steps": float(np.median(lasts)) if lasts else None,
             "mean_steps_per_trial": float(np.mean(per)) if per else None,
             "seeds_with_optimal_trial": int(sum(m <= best["steps"] for m in mins)),
+            "seeds": len(ms),
         })
     return out
 
 
 def table(rows):
     lines = ["| robot | condition | shortest path (units) | optimal steps | best trial | median last trial | "
-             "mean steps per trial / optimal | seeds with an optimal trial |",
+             "mean steps per trial / optimal | seeds with a trial at or below the optimal plan |",
              "|---|---|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
         ratio = (r["mean_steps_per_trial"] / r["optimal_steps"]) if r["mean_steps_per_trial"] else None
-        lines.append(f"| {r['robot']} | {r['condition']} | {r['optimal_length']:.1f} | {r['optimal_steps']} "
+        steps = (str(r["optimal_steps"]) if r["optimal_steps_lower"] == r["optimal_steps"]
+                 else f"{r['optimal_steps_lower']}-{r['optimal_steps']}")
+        lines.append(f"| {r['robot']} | {r['condition']} | {r['optimal_length']:.1f} | {steps} "
                      f"| {r['best_trial_steps'] if r['best_trial_steps'] is not None else '-'} "
                      f"| {r['median_last_trial_steps'] if r['median_last_trial_steps'] is not None else '-'} "
-                     f"| {'-' if ratio is None else f'{ratio:.1f}x'} | {r['seeds_with_optimal_trial']} |")
+                     f"| {'-' if ratio is None else f'{ratio:.1f}x'} | {r['seeds_with_optimal_trial']}/{r['seeds']} |")
     return "\n".join(lines)

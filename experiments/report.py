@@ -1,4 +1,6 @@
 """`ebrl report DIR`: summary.json, REPORT.md and the figures, from the run folders."""
+import json
+import os
 import pathlib
 
 import numpy as np
@@ -194,7 +196,8 @@ def typical_seed(runs, robot, condition):
 
 
 def traces_figure(root, runs, robot, path):
-    """Figures 2 and 4: typical successful traces (the last trial of the median seed)."""
+    """Figures 2 and 4: typical successful traces: the median seed's first trial and a
+    typical learned one."""
     plt = _plt()
     fig, axes = plt.subplots(1, 2, figsize=(11, 3.9))
     for ax, condition in zip(axes, paper.CONDITIONS):
@@ -204,11 +207,14 @@ def traces_figure(root, runs, robot, path):
             ax.set_title(f"{condition}: no seed with two goals")
             continue
         paths = results.trial_paths(*results.load_trace(root, robot, condition, seed))
-        first, last = paths[0], paths[-1]
+        # A typical learned trial: the median-length trial of the seed's second half.
+        later = sorted(range(len(paths) // 2, len(paths)), key=lambda i: len(paths[i]))
+        k = later[len(later) // 2]
+        first, last = paths[0], paths[k]
         ax.plot(first[:, 0], first[:, 1], lw=0.4, color="0.6", alpha=0.7,
                 label=f"first trial ({len(first) - 1} steps)")
         ax.plot(last[:, 0], last[:, 1], lw=1.2, color="tab:red",
-                label=f"last trial ({len(last) - 1} steps)")
+                label=f"typical learned trial, #{k + 1} ({len(last) - 1} steps)")
         ax.plot(*last[0], "o", color="tab:blue")
         ax.set_title(f"{'without' if condition == 'random' else 'with'} avoidance, seed {seed}")
         ax.legend(loc="lower right", fontsize=7)
@@ -242,6 +248,42 @@ def first_vs_learned_figure(summary, path):
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)
+
+
+BEGIN, END = "<!-- ebrl report: generated, do not edit -->", "<!-- ebrl report: end -->"
+
+
+def publish(root, results_md, figures_dir):
+    """Regenerates the tables of results_md (between BEGIN and END, keeping the rest),
+    copies the figures into figures_dir and summary.json beside results_md."""
+    import shutil
+    root, results_md, figures_dir = map(pathlib.Path, (root, results_md, figures_dir))
+    summary = json.loads((root / "summary.json").read_text())
+    figures_dir.mkdir(parents=True, exist_ok=True)
+    for png in sorted((root / "figures").glob("*.png")):
+        shutil.copyfile(png, figures_dir / png.name)
+    rel = os.path.relpath(figures_dir, results_md.parent)
+    block = [BEGIN, "", "### Section 3.6, the paper against ours", "", comparison_table(summary), "",
+             "### Goals within the budget", "", goals_table(summary), "",
+             "### Qualitative claims", "", claims_table(summary), ""]
+    if "optimal" in summary:
+        block += ["### Against the optimal path", "", optimal_table(summary["optimal"]), ""]
+    for png in sorted((root / "figures").glob("*.png")):
+        block += [f"![{png.stem}]({rel}/{png.name})", ""]
+    block.append(END)
+    text = results_md.read_text() if results_md.exists() else f"# Results\n\n{BEGIN}\n{END}\n"
+    if BEGIN not in text or END not in text:
+        text = text.rstrip() + f"\n\n{BEGIN}\n{END}\n"
+    head, rest = text.split(BEGIN, 1)
+    tail = rest.split(END, 1)[1]
+    results.atomic_write(results_md, head + "\n".join(block) + tail)
+    results.atomic_write(results_md.parent / "summary.json", results.dumps(summary))
+    return results_md
+
+
+def optimal_table(rows):
+    from experiments import optimal
+    return optimal.table(rows)
 
 
 def build(root):
