@@ -9,20 +9,9 @@ matrix-vector product and the top-N_r selection).
 import time
 
 import mujoco
-import numpy as np
 
+from ebrl.benchmark import reference_pass
 from experiments import protocol
-
-
-def reference_pass(memory_size, dim, recall_size, repeats=2000):
-    """us for one float32 matrix-vector product over (memory_size, dim) + argpartition."""
-    rng = np.random.default_rng(0)
-    memory = rng.random((memory_size, dim), dtype=np.float32)
-    x = rng.random(dim, dtype=np.float32)
-    started = time.perf_counter()
-    for _ in range(repeats):
-        np.argpartition(memory @ x, -recall_size)[-recall_size:]
-    return (time.perf_counter() - started) / repeats * 1e6
 
 
 def measure(robot, steps):

@@ -1,7 +1,6 @@
 """The room, the robots and the tasks against the paper's Sections 3.1-3.3, in real MuJoCo."""
 import math
 
-import dm_env
 import numpy as np
 import pytest
 from absl.testing import absltest
