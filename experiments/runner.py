@@ -43,7 +43,7 @@ def run(specs, out, *, workers=None, backend="local", progress=True):
     if progress:
         from tqdm import tqdm
         bar = tqdm(total=len(todo), unit="run", dynamic_ncols=True,
-                   desc=f"{len(specs) - len(todo)} done before")
+                   desc=f"runs ({len(specs) - len(todo)} already on disk)")
     started, steps_done = time.perf_counter(), 0
 
     def done(spec, result):
