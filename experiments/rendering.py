@@ -33,7 +33,7 @@ def choose_backend():
     candidates += [b for b in ((wanted,) if wanted in BACKENDS else ()) + BACKENDS if b]
     errors = []
     for backend in dict.fromkeys(candidates):
-        env = dict(os.environ, MUJOCO_GL=backend)
+        env = backend_environment(backend)
         proc = subprocess.run([sys.executable, "-c", _PROBE], env=env, capture_output=True,
                               text=True, timeout=120)
         if proc.returncode == 0:
@@ -44,12 +44,24 @@ def choose_backend():
                          + "); install Mesa's EGL or libosmesa6")
 
 
+def backend_environment(backend):
+    """os.environ for a child process that renders with backend. dm_control's EGL import
+    sets PYOPENGL_PLATFORM=egl in its process, which would break OSMesa in a child."""
+    env = dict(os.environ, MUJOCO_GL=backend)
+    if backend in BACKENDS:
+        env["PYOPENGL_PLATFORM"] = backend
+    else:
+        env.pop("PYOPENGL_PLATFORM", None)
+    return env
+
+
 def ensure_backend():
     """Sets MUJOCO_GL to a working backend; call before dm_control is imported."""
     if "dm_control" in sys.modules and os.environ.get("MUJOCO_GL") in BACKENDS:
         return os.environ["MUJOCO_GL"]
-    os.environ["MUJOCO_GL"] = choose_backend()
-    return os.environ["MUJOCO_GL"]
+    backend = choose_backend()
+    os.environ.update(backend_environment(backend))
+    return backend
 
 
 def frame(physics, path_xy=(), height=HEIGHT, width=WIDTH):

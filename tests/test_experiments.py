@@ -194,7 +194,8 @@ env.close()
 def test_offscreen_frame_renders_with_no_error_at_exit(backend, library):
     if not ctypes.util.find_library(library):
         pytest.skip(f"lib{library} is not installed")
+    from experiments.rendering import backend_environment
     proc = subprocess.run([sys.executable, "-c", _RENDER], cwd=ROOT, capture_output=True,
-                          text=True, timeout=120, env=dict(os.environ, MUJOCO_GL=backend))
+                          text=True, timeout=120, env=backend_environment(backend))
     assert proc.returncode == 0, proc.stderr
     assert proc.stderr.strip() == "", proc.stderr
