@@ -101,11 +101,11 @@ def agent_input(observation):
     return (readings if velocity is None else np.concatenate([readings, velocity])), readings
 
 
-def execute(spec, progress=None, on_step=None):
+def execute(spec, on_step=None):
     """Runs one spec to its budget and returns its trials, trace and metrics.
 
-    progress, if given, is called now and then with the number of new steps done;
-    on_step(step, env, trial_start_index) after every step (videos use it).
+    on_step(step, env, trace, trial_begin, trial_start), if given, is called after
+    every step (videos use it).
     """
     import tasks
 
@@ -132,10 +132,6 @@ def execute(spec, progress=None, on_step=None):
             starts.append(pose()[:2])
         if on_step is not None:
             on_step(step, env, trace, (trial_ends[-1] + 1) if trial_ends else 0, starts[-1])
-        if progress is not None and step % 5000 == 0:
-            progress(5000)
-    if progress is not None:
-        progress(spec.steps % 5000)
     seconds = time.perf_counter() - started
     env.close()
     return {

@@ -107,6 +107,7 @@ def record(spec, path, *, frames=600, fps=30):
     """Runs spec exactly as `ebrl run` does and writes an MP4 of it, from the top
     camera, with the current trial's path drawn; at most `frames` frames."""
     import imageio.v2 as imageio
+    import numpy as np
 
     from experiments import protocol
     every = max(1, spec.steps // frames)
@@ -118,12 +119,9 @@ def record(spec, path, *, frames=600, fps=30):
             return
         # Trial path: its start, then the positions since (decimated to bound the scene).
         pts = trace[trial_begin:step + 1]
-        if trial_begin == step + 1 or len(pts) == 0:
-            pts = np.empty((0, 2))
         pts = np.vstack([start, pts[:: max(1, len(pts) // 400)], pts[-1:]]) if len(pts) else [start]
         writer.append_data(frame(env.physics, pts))
 
-    import numpy as np
     try:
         result = protocol.execute(spec, on_step=on_step)
     finally:
