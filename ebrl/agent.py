@@ -44,6 +44,9 @@ import numpy as np
 from ebrl.config import Config
 from ebrl.memory import Memory
 
+#: Largest |obs| value accepted: the similarity's float32 matrix holds x^2 (max 3.4e38).
+OBS_LIMIT = 1e18
+
 
 def eq1(weight, similarity, alpha):
     """eq 1: W <- W + alpha (S(M_i, s) - W), for a recall entry moved along its link.
@@ -63,27 +66,32 @@ def eq6(memory, newest, reward, discount, cutoff):
     t) along backward links, t_j being each element's stored time. Stops where
     gamma^(t - t_j) < cutoff. (The paper prints gamma^(j - t); with gamma < 1 only
     t - j, the age, makes sense.)"""
-    t, j = int(memory.time[newest]), newest
-    for _ in range(memory.capacity):
-        if j < 0:
-            break
-        g = discount ** (t - int(memory.time[j]))
-        if g < cutoff:
-            break
-        memory.utility[j] += reward * g
-        j = int(memory.prev[j])
+    # Each link goes back at least one step, so at most max_age + 1 links matter.
+    max_age = math.log(cutoff) / math.log(discount) if cutoff > 0 else math.inf
+    chain = memory.chain(newest, min(memory.capacity, max_age + 1))
+    g = discount ** (memory.time[newest] - memory.time[chain]).astype(np.float64)
+    chain, g = chain[g >= cutoff], g[g >= cutoff]
+    memory.utility[chain] += reward * g
 
 
 def eq7(memory, start, reward, rho):
     """eq 7: R_i += rho r (1 - R_i) if r > 0, R_i += rho r R_i if r < 0, for start and
     every element before it along the backward links (no discount, no cutoff)."""
-    j = start
-    for _ in range(memory.capacity):
-        if j < 0:
-            break
-        r = memory.reliability_of(j)
-        memory.set_reliability(j, r + rho * reward * ((1.0 - r) if reward > 0 else r))
-        j = int(memory.prev[j])
+    chain = memory.chain(start, memory.capacity)
+    r = memory.reliability_of(chain)
+    memory.set_reliability(chain, r + rho * reward * ((1.0 - r) if reward > 0 else r))
+
+
+def smallest(values, k):
+    """Slots of the k smallest values, ascending slots; ties at the k-th value go to
+    the lowest slots."""
+    part = values.argpartition(k)
+    top, edge = part[:k], values[part[k]]
+    if values[top].max() == edge:  # a tie across the edge
+        below = np.flatnonzero(values < edge)
+        top = np.concatenate((below, np.flatnonzero(values == edge)[: k - len(below)]))
+    top.sort()
+    return top
 
 
 class Agent:
@@ -108,6 +116,7 @@ class Agent:
         self._table = np.zeros(0, dtype=np.int64)
         self._table_dist = np.zeros(0, dtype=np.float32)
         self._table_list = []
+        self._radius = np.inf  # see _recall: set from the recall table's distances
         self._tail = -1      # the current episode's latest element (-1: a new episode)
         self._referred = -1  # the trial's latest element used for a decision (eq 7)
         # The experience of the last act, stored by learn.
@@ -146,13 +155,14 @@ class Agent:
             raise RuntimeError("act() called twice: call learn() after each act()")
         x = self._x
         x[:] = obs
-        if not np.isfinite(x).all():
-            raise ValueError(f"obs must be finite, got NaN or inf at index "
-                             f"{np.flatnonzero(~np.isfinite(x)).tolist()}")
+        if not x.dot(x) < OBS_LIMIT ** 2:  # also false for NaN
+            bad = np.flatnonzero(~(np.abs(x) < OBS_LIMIT)).tolist()
+            raise ValueError(f"obs must be finite and within +-{OBS_LIMIT:g} (the memory "
+                             f"stores x^2 in float32); bad values at indices {bad}")
         cfg, mem = self.config, self.memory
         # 1. The recall table follows the input (eq 1-4).
         if mem.size:
-            self._recall(mem.distances(x))
+            self._recall(x)
         # 2. The policy (eq 5), unless the agent explores; else the fallback.
         explore = self.rng.random() < cfg.exploration_rate
         element = -1
@@ -179,28 +189,37 @@ class Agent:
         self._pending = True
         return action
 
-    def _recall(self, dist):
-        """Section 2.2 on dist = 1 - S(M_j, s_t) for every element (a scratch array)."""
-        table = self._table
-        if len(table):
-            ahead = self.memory.next[table]
-            moved = ahead >= 0
-            table_dist = self._table_dist
-            if not moved.all():  # entries at the end of their episode drop out
-                ahead, table_dist = ahead[moved], table_dist[moved]
+    def _recall(self, x):
+        """Section 2.2: the new recall table for input x, worked on distances 1 - W."""
+        mem, k = self.memory, self.config.recall_size
+        dist = mem.distances(x)  # every element is a candidate with 1 - S(M_j, x)
+        if self._table_list:
+            # Entries move along their forward links; a link of -1 (the end of an
+            # episode) reads dist[-1] = inf, so those entries drop out.
+            ahead = mem.next[self._table]
             d_ahead = dist[ahead]
             # eq 1; an entry that is also a candidate keeps the larger weight.
-            dist[ahead] = np.minimum(d_ahead, eq1(table_dist, d_ahead, self.config.alpha))
-        k = self.config.recall_size
-        if len(dist) <= k:
-            top = np.arange(len(dist))
+            dist[ahead] = np.minimum(d_ahead, eq1(self._table_dist, d_ahead,
+                                                  self.config.alpha))
+        size = mem.size
+        if size <= k:
+            top = np.arange(size)
         else:
-            part = np.argpartition(dist, k)
-            top, edge = part[:k], dist[part[k]]
-            if dist[top].max() == edge:  # a tie across the edge: the lowest slots win
-                below = np.flatnonzero(dist < edge)
-                top = np.concatenate([below, np.flatnonzero(dist == edge)[: k - len(below)]])
-            top.sort()
+            # The k smallest distances, ties to the lowest slot. Usually a few times k
+            # elements lie within self._radius: sorting those is exact (all the others
+            # are farther) and cheaper than a selection over the whole memory.
+            scored = dist[:size]
+            near = (scored <= self._radius).nonzero()[0]
+            if k <= len(near) <= 64 * k:
+                d_near = scored[near]
+                order = d_near.argsort(kind="stable")[:k]
+                edge = float(d_near[order[-1]])
+                self._radius = max(0.98 * self._radius, 1.2 * edge)
+                order.sort()
+                top = near[order]
+            else:
+                top = smallest(scored, k)
+                self._radius = 1.2 * float(scored[top].max())
         self._table, self._table_dist = top, dist[top]
         self._table_list = top.tolist()
 
@@ -234,7 +253,7 @@ class Agent:
 
     def _forget(self, k):
         """Forgets element k; pointers to it move to its predecessor or go."""
-        p = int(self.memory.prev[k])
+        p = self.memory.prev[k]
         self.memory.forget(k)
         if self._tail == k:
             self._tail = p
