@@ -1,291 +1,257 @@
-"""The episode-based reinforcement learner of Unemi (2000), Section 2, with a fallback
-behaviour (random walk or intrinsic avoidance, Section 3.4) for when memory does not act.
+"""The episode-based reinforcement learner (Unemi 2000, Section 2).
 
 Worked example::
 
-    import numpy as np
-    import ebrl
-
+    import numpy as np, ebrl
     agent = ebrl.Agent(ebrl.paper_config("two_wheel"), obs_dim=7, action_dim=1,
-                       fallback=ebrl.intrinsic.fallback_for("two_wheel", "avoidance"),
-                       seed=0)
-    rng = np.random.default_rng(0)
-    obs = rng.random(7)                    # range readings scaled to [0, 1], leftmost first
-    for t in range(1000):
-        a = agent.act(obs)                 # from memory (eq 1-5) or from the fallback
-        obs = rng.random(7)                # ... your environment steps with a ...
-        r, last = (1.0, True) if t % 100 == 99 else (0.0, False)
-        agent.learn(r, last)               # store, eq 6-7, time discount; last ends the trial
+                       fallback=ebrl.intrinsic.fallback_for("two_wheel", "avoidance"), seed=0)
+    obs = np.zeros(7)                      # readings scaled to [0, 1]
+    for t in range(100):
+        action = agent.act(obs)            # memory (eq 5) or the fallback behaviour
+        obs, reward, last = np.random.rand(7), float(t == 99), t == 99   # your environment
+        agent.learn(reward, last)          # store, eq 6-7, time discount; last ends the episode
 
-The floating robot passes its 8 readings and 2 velocities as obs (obs_dim=10, groups
-[0..7], [8, 9] with group_weights 0.7, 0.3 for eq 3) and the readings alone to the
-fallback: agent.act(obs, readings=obs[:8]). Without readings the fallback gets obs.
-
-One step t:
-
-1. act(s_t) updates the recall table (Section 2.2): each entry moves along its forward
-   link (dropped at the end of its episode) and its weight follows eq 1; every element
-   is also a candidate with weight S(M_j, s_t) (eq 2-4); an element that is both keeps
-   the larger weight; the recall_size largest stay (ties: lowest slot).
-2. act picks the entry maximising eq 5, min(W_i, U_i), and repeats its element's action,
-   unless the table is empty, the best measure is <= policy_threshold, or the agent
-   explores (probability exploration_rate): then the fallback acts.
-3. learn(r, last) stores (s_t, a_t) after the episode's previous element, forgetting
-   the least reliable element first if the memory is full.
-4. If r != 0: eq 6 along the backward links from the new element; eq 7 along the
-   backward links from the trial's latest element used for a decision.
-5. Every reliability is multiplied by time_discount.
-6. If last: the episode (trial) ends; the next act starts a new one.
+Per step: act(s_t) advances the recall table (eq 1), adds the memory elements most
+similar to s_t (eq 2-4), and acts as the best entry's element did (eq 5) unless no
+entry exceeds the threshold or the agent explores. learn(r) stores (s_t, a_t) as the
+next element of the current episode, forgetting the least reliable element when the
+memory is full, then applies eq 6 and eq 7 when r != 0 and decays every reliability.
 """
-import math
-
 import numpy as np
 
 from ebrl.config import Config
-from ebrl.memory import Memory
 
-#: Largest |obs| value accepted: the similarity's float32 matrix holds x^2 (max 3.4e38).
-OBS_LIMIT = 1e18
+_RESCALE_BELOW = 1e-150  # the lazy reliability scale is folded into the values below this
 
 
 def eq1(weight, similarity, alpha):
-    """eq 1: W <- W + alpha (S(M_i, s) - W), for a recall entry moved along its link.
-
-    eq 1 is affine, so the agent applies it to distances 1 - W and 1 - S unchanged:
-    1 - W' = (1 - W) + alpha ((1 - S) - (1 - W))."""
+    """eq 1: W <- W + alpha (S(M_i, s) - W), for an entry moved along its forward link."""
     return weight + alpha * (similarity - weight)
 
 
 def eq5(weights, utilities):
-    """eq 5: the policy's measure min(W_i, U_i) for each recall-table entry."""
+    """eq 5's measure, min(W_i, U_i), for each recall-table entry."""
     return np.minimum(weights, utilities)
-
-
-def eq6(memory, newest, reward, discount, cutoff):
-    """eq 6: U_j += r_t * gamma^(t - t_j) for the elements reached from newest (stored at
-    t) along backward links, t_j being each element's stored time. Stops where
-    gamma^(t - t_j) < cutoff. (The paper prints gamma^(j - t); with gamma < 1 only
-    t - j, the age, makes sense.)"""
-    # Each link goes back at least one step, so at most max_age + 1 links matter.
-    max_age = math.log(cutoff) / math.log(discount) if cutoff > 0 else math.inf
-    chain = memory.chain(newest, min(memory.capacity, max_age + 1))
-    g = discount ** (memory.time[newest] - memory.time[chain]).astype(np.float64)
-    chain, g = chain[g >= cutoff], g[g >= cutoff]
-    memory.utility[chain] += reward * g
-
-
-def eq7(memory, start, reward, rho):
-    """eq 7: R_i += rho r (1 - R_i) if r > 0, R_i += rho r R_i if r < 0, for start and
-    every element before it along the backward links (no discount, no cutoff)."""
-    chain = memory.chain(start, memory.capacity)
-    r = memory.reliability_of(chain)
-    memory.set_reliability(chain, r + rho * reward * ((1.0 - r) if reward > 0 else r))
-
-
-def smallest(values, k):
-    """Slots of the k smallest values, ascending slots; ties at the k-th value go to
-    the lowest slots."""
-    part = values.argpartition(k)
-    top, edge = part[:k], values[part[k]]
-    if values[top].max() == edge:  # a tie across the edge
-        below = np.flatnonzero(values < edge)
-        top = np.concatenate((below, np.flatnonzero(values == edge)[: k - len(below)]))
-    top.sort()
-    return top
 
 
 class Agent:
     def __init__(self, config, obs_dim, action_dim, fallback, *, groups=None,
                  group_weights=None, seed=None):
         if not isinstance(config, Config):
-            raise TypeError(f"config must be an ebrl.Config, got {type(config).__name__}")
-        for name, v in (("obs_dim", obs_dim), ("action_dim", action_dim)):
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-                raise ValueError(f"{name} must be an integer >= 1, got {v!r}")
-        if not callable(fallback):
-            raise TypeError("fallback must be callable as fallback(readings, rng)")
-        n = int(obs_dim)
-        groups, group_weights = _check_groups(groups, group_weights, n)
+            raise ValueError("config must be an ebrl.Config")
+        if int(obs_dim) < 1 or int(action_dim) < 1:
+            raise ValueError("obs_dim and action_dim must be positive")
         self.config, self.fallback = config, fallback
-        self.obs_dim, self.action_dim = n, int(action_dim)
+        self.obs_dim, self.action_dim = n, _ = int(obs_dim), int(action_dim)
         self.rng = np.random.default_rng(seed)
-        self.memory = Memory(config.memory_size, n, self.action_dim, groups, group_weights,
-                             config.variance_floor)
-        # Recall table (Section 2.2): element slots, ascending, and their distances
-        # 1 - W (the agent works with 1 - S throughout; see eq1).
+        M = config.memory_size
+        # Memory (2.1): inputs (float64 for the variance sums, float32 [x; x^2] stored
+        # one feature per row for the similarity product), actions, utility,
+        # reliability, time stamps, links.
+        self._x = np.zeros((M, n))
+        self._aug = np.zeros((2 * n, M), dtype=np.float32)
+        self._action = np.zeros((M, self.action_dim))
+        self._utility = np.zeros(M)
+        self._rel = np.zeros(M)  # true reliability = self._rel * self._rel_scale
+        self._rel_scale = 1.0
+        self._time = np.zeros(M, dtype=np.int64)
+        self._next = np.full(M, -1, dtype=np.int64)
+        self._prev = np.full(M, -1, dtype=np.int64)
+        self._size = 0
+        self._sum, self._sumsq = np.zeros(n), np.zeros(n)
+        # Modalities (eq 3-4): a 0/1 membership matrix, weights normalised to sum 1.
+        if groups is None:
+            groups, group_weights = [np.arange(n)], [1.0]
+        if group_weights is None or len(group_weights) != len(groups):
+            raise ValueError("group_weights must give one weight per group")
+        member = np.zeros((n, len(groups)))
+        for j, idx in enumerate(groups):
+            member[np.asarray(idx), j] = 1.0
+        if not np.array_equal(member.sum(axis=1), np.ones(n)):
+            raise ValueError("groups must cover every observation component exactly once")
+        w = np.asarray(group_weights, dtype=np.float64)
+        if np.any(w < 0) or w.sum() <= 0:
+            raise ValueError("group_weights must be non-negative with a positive sum")
+        # Row j scaled by 1 / (2 n_j): the product then gives eq 4's radicand.
+        self._member = (member / (2.0 * member.sum(axis=0))).T.copy()
+        self._group_w = (w / w.sum()).astype(np.float32)
+        self._w = np.zeros((len(groups), 2 * n), dtype=np.float32)
+        # Recall table (2.2), the episode being recorded, the last decision.
         self._table = np.zeros(0, dtype=np.int64)
-        self._table_dist = np.zeros(0, dtype=np.float32)
-        self._table_list = []
-        self._radius = np.inf  # see _recall: set from the recall table's distances
-        self._tail = -1      # the current episode's latest element (-1: a new episode)
-        self._referred = -1  # the trial's latest element used for a decision (eq 7)
-        # The experience of the last act, stored by learn.
-        self._x = np.zeros(n)
-        self._action = np.zeros(self.action_dim)
-        self._pending = False
-        self._steps = 0
-        self._used_memory = False
-        self._memory_decisions = 0
-        self._fallback_decisions = 0
+        self._weights = np.zeros(0, dtype=np.float32)
+        self._tail = -1        # the current episode's latest element
+        self._referred = -1    # the trial's latest element used for a decision (eq 7)
+        self._obs = self._act = None
+        self.steps = 0
+        self.used_memory = False
+        self.memory_decisions = 0
+        self.fallback_decisions = 0
 
-    # -- read-outs -----------------------------------------------------------------------
-    size = property(lambda self: self.memory.size, doc="elements stored")
-    steps = property(lambda self: self._steps, doc="completed act + learn steps")
-    used_memory = property(lambda self: self._used_memory,
-                           doc="whether the last action came from memory (eq 5)")
-    memory_decisions = property(lambda self: self._memory_decisions)
-    fallback_decisions = property(lambda self: self._fallback_decisions)
-    reliability = property(lambda self: self.memory.reliability, doc="(size,) true values")
-    utility = property(lambda self: self.memory.utility[: self.memory.size].copy())
-    variance = property(lambda self: self.memory.variance, doc="eq 2's V_i")
+    # -- read-outs -----------------------------------------------------------------
+    @property
+    def size(self):
+        return self._size
+
+    @property
+    def reliability(self):
+        return self._rel[: self._size] * self._rel_scale
+
+    @property
+    def utility(self):
+        return self._utility[: self._size]
+
+    @property
+    def variance(self):
+        """eq 2's V_i over the stored inputs, kept from running sums, floored."""
+        k = max(self._size, 1)
+        mean = self._sum / k
+        return np.maximum(self._sumsq / k - mean * mean, self.config.variance_floor)
 
     def recall_table(self):
-        """(element slots, weights W) of the recall table."""
-        return self._table.copy(), 1.0 - self._table_dist.astype(np.float64)
+        return self._table.copy(), self._weights.copy()
 
-    # -- acting ----------------------------------------------------------------------------
+    # -- acting --------------------------------------------------------------------
+    def _similarities(self, x):
+        """eq 2-4 for x against every stored element, as one float32 product."""
+        inv = 1.0 / self.variance
+        n, w, member = self.obs_dim, self._w, self._member
+        # sum_i (x_i - m_i)^2 / V_i = sum x^2/V - 2 sum x m / V + sum m^2 / V, per group.
+        np.multiply(member, -2.0 * x * inv, out=w[:, :n], casting="unsafe")
+        np.multiply(member, inv, out=w[:, n:], casting="unsafe")
+        q = member @ (x * x * inv)
+        d2 = w @ self._aug[:, : self._size]
+        d2 += q.astype(np.float32)[:, None]
+        np.maximum(d2, 0.0, out=d2)
+        np.sqrt(d2, out=d2)
+        return 1.0 - self._group_w @ d2
+
     def act(self, obs, readings=None):
-        """The action (float64, (action_dim,)) for observation obs, a 1-D float array
-        of obs_dim values. The fallback gets readings, or obs when readings is None."""
-        obs = np.asarray(obs)
-        if obs.shape != self._x.shape:
-            raise ValueError(f"obs must be a 1-D array of shape ({self.obs_dim},), "
-                             f"got shape {obs.shape}")
-        if self._pending:
-            raise RuntimeError("act() called twice: call learn() after each act()")
-        x = self._x
-        x[:] = obs
-        if not x.dot(x) < OBS_LIMIT ** 2:  # also false for NaN
-            bad = np.flatnonzero(~(np.abs(x) < OBS_LIMIT)).tolist()
-            raise ValueError(f"obs must be finite and within +-{OBS_LIMIT:g} (the memory "
-                             f"stores x^2 in float32); bad values at indices {bad}")
-        cfg, mem = self.config, self.memory
-        # 1. The recall table follows the input (eq 1-4).
-        if mem.size:
-            self._recall(x)
-        # 2. The policy (eq 5), unless the agent explores; else the fallback.
-        explore = self.rng.random() < cfg.exploration_rate
-        element = -1
-        if self._table_list and not explore:
-            measure = eq5(1.0 - self._table_dist, mem.utility[self._table])
-            best = int(measure.argmax())  # ties: the lowest slot
-            if measure[best] > cfg.policy_threshold:
-                element = self._table_list[best]
-        if element >= 0:
-            action = mem.actions[element].copy()
-            self._referred = element
-            self._memory_decisions += 1
+        """The action for observation obs (1-D). The fallback gets readings, or obs."""
+        x = np.asarray(obs, dtype=np.float64)
+        if x.shape != (self.obs_dim,):
+            raise ValueError(f"observation must have shape ({self.obs_dim},), got {x.shape}")
+        if not np.isfinite(x).all():
+            raise ValueError("observation contains NaN or inf")
+        c = self.config
+        if self._size:
+            s = self._similarities(x)
+            # eq 1: entries follow their forward links; those at an episode's end drop out.
+            ahead = self._next[self._table]
+            keep = ahead >= 0
+            ahead, w = ahead[keep], self._weights[keep]
+            w = eq1(w, s[ahead], c.alpha)
+            # Every element is a candidate with its similarity; an advanced entry keeps
+            # the larger of its eq 1 weight and its similarity.
+            s[ahead] = np.maximum(s[ahead], w)
+            if self._size > c.recall_size:
+                top = np.argpartition(s, self._size - c.recall_size)[self._size - c.recall_size:]
+            else:
+                top = np.arange(self._size)
+            self._table, self._weights = top, s[top]
+        explore = self.rng.random() < c.exploration_rate
+        action = None
+        if len(self._table) and not explore:
+            # eq 5: the entry maximising min(W_i, U_i), if it clears the threshold.
+            measure = eq5(self._weights, self._utility[self._table])
+            best = int(np.argmax(measure))
+            if measure[best] > c.policy_threshold:
+                element = int(self._table[best])
+                action = self._action[element].copy()
+                self._referred = element
+        self.used_memory = action is not None
+        if action is None:
+            action = np.asarray(self.fallback(x if readings is None else readings, self.rng),
+                                dtype=np.float64).reshape(self.action_dim)
+            self.fallback_decisions += 1
         else:
-            action = np.asarray(self.fallback(obs if readings is None else readings, self.rng),
-                                dtype=np.float64)
-            if action.shape != self._action.shape:
-                if action.size != self.action_dim:
-                    raise ValueError(f"fallback returned {action.size} values, expected "
-                                     f"action_dim={self.action_dim}")
-                action = action.reshape(self.action_dim)
-            self._fallback_decisions += 1
-        self._used_memory = element >= 0
-        self._action[:] = action
-        self._pending = True
+            self.memory_decisions += 1
+        self._obs, self._act = x, action
         return action
 
-    def _recall(self, x):
-        """Section 2.2: the new recall table for input x, worked on distances 1 - W."""
-        mem, k = self.memory, self.config.recall_size
-        dist = mem.distances(x)  # every element is a candidate with 1 - S(M_j, x)
-        if self._table_list:
-            # Entries move along their forward links; a link of -1 (the end of an
-            # episode) reads dist[-1] = inf, so those entries drop out.
-            ahead = mem.next[self._table]
-            d_ahead = dist[ahead]
-            # eq 1; an entry that is also a candidate keeps the larger weight.
-            dist[ahead] = np.minimum(d_ahead, eq1(self._table_dist, d_ahead,
-                                                  self.config.alpha))
-        size = mem.size
-        if size <= k:
-            top = np.arange(size)
-        else:
-            # The k smallest distances, ties to the lowest slot. Usually a few times k
-            # elements lie within self._radius: sorting those is exact (all the others
-            # are farther) and cheaper than a selection over the whole memory.
-            scored = dist[:size]
-            near = (scored <= self._radius).nonzero()[0]
-            if k <= len(near) <= 64 * k:
-                d_near = scored[near]
-                order = d_near.argsort(kind="stable")[:k]
-                edge = float(d_near[order[-1]])
-                self._radius = max(0.98 * self._radius, 1.2 * edge)
-                order.sort()
-                top = near[order]
-            else:
-                top = smallest(scored, k)
-                self._radius = 1.2 * float(scored[top].max())
-        self._table, self._table_dist = top, dist[top]
-        self._table_list = top.tolist()
-
-    # -- learning ----------------------------------------------------------------------------
+    # -- learning ------------------------------------------------------------------
     def learn(self, reward, last=False):
-        """Stores the last act's experience, learns from reward (eq 6-7) when it is not
-        0, applies the time discount, and ends the episode when last is true."""
-        if not self._pending:
-            raise RuntimeError("learn() must follow an act()")
+        """Stores the last act's experience, learns from reward, ends the episode if last."""
+        if self._obs is None:
+            raise ValueError("learn() needs an act() first")
         reward = float(reward)
-        if not math.isfinite(reward):
-            raise ValueError(f"reward must be finite, got {reward!r}")
-        cfg, mem = self.config, self.memory
-        # 3. Store (s_t, a_t) after the episode's previous element.
-        if mem.full:
-            self._forget(mem.least_reliable())
-        self._tail = mem.store(self._x, self._action, self._steps, self._tail,
-                               cfg.initial_reliability, cfg.initial_utility)
-        # 4. Learning from reward (Section 2.4).
+        if reward != reward or abs(reward) == float("inf"):
+            raise ValueError("reward must be finite")
+        c = self.config
+        if self._size == c.memory_size:
+            slot = int(np.argmin(self._rel))
+            self._forget(slot)
+        else:
+            slot = self._size
+            self._size += 1
+        x = self._obs
+        self._x[slot] = x
+        self._aug[: self.obs_dim, slot] = x
+        self._aug[self.obs_dim:, slot] = x * x
+        self._sum += x
+        self._sumsq += x * x
+        self._action[slot] = self._act
+        self._utility[slot] = c.initial_utility
+        self._rel[slot] = c.initial_reliability / self._rel_scale
+        self._time[slot] = self.steps
+        self._next[slot] = -1
+        self._prev[slot] = self._tail
+        if self._tail >= 0:
+            self._next[self._tail] = slot
+        self._tail = slot
         if reward != 0.0:
-            eq6(mem, self._tail, reward, cfg.discount, cfg.utility_cutoff)
+            self._utility_update(slot, reward)
             if self._referred >= 0:
-                eq7(mem, self._referred, reward, cfg.reliability_rate)
-        # 5. Time discount (Section 2.1).
-        mem.decay(cfg.time_discount)
-        self._steps += 1
-        self._pending = False
-        # 6. The end of the trial ends the episode.
+                self._reliability_update(self._referred, reward)
+        # Time discount: every reliability times time_discount, as one lazy scale.
+        self._rel_scale *= c.time_discount
+        if self._rel_scale < _RESCALE_BELOW:
+            self._rel *= self._rel_scale
+            self._rel_scale = 1.0
+        self.steps += 1
+        self._obs = self._act = None
         if last:
             self.end_episode()
-
-    def _forget(self, k):
-        """Forgets element k; pointers to it move to its predecessor or go."""
-        p = self.memory.prev[k]
-        self.memory.forget(k)
-        if self._tail == k:
-            self._tail = p
-        if self._referred == k:
-            self._referred = p
-        if k in self._table_list:
-            keep = self._table != k
-            self._table, self._table_dist = self._table[keep], self._table_dist[keep]
-            self._table_list = self._table.tolist()
 
     def end_episode(self):
         """The next act starts a new episode, with an empty recall table."""
         self._tail = self._referred = -1
         self._table = np.zeros(0, dtype=np.int64)
-        self._table_dist = np.zeros(0, dtype=np.float32)
-        self._table_list = []
+        self._weights = np.zeros(0, dtype=np.float32)
 
+    def _utility_update(self, element, reward):
+        """eq 6: U_j += r * gamma^(t - t_j) along the backward links from the newest
+        element, stopping where gamma^(t - t_j) < utility_cutoff."""
+        c, t, j = self.config, self._time[element], element
+        while j >= 0:
+            g = c.discount ** int(t - self._time[j])
+            if g < c.utility_cutoff:
+                break
+            self._utility[j] += reward * g
+            j = int(self._prev[j])
 
-def _check_groups(groups, weights, n):
-    """eq 3's modalities: index arrays splitting 0..n-1, one weight >= 0 each."""
-    if groups is None:
-        if weights is not None:
-            raise ValueError("group_weights given without groups")
-        return [np.arange(n)], [1.0]
-    groups = [np.asarray(g, dtype=np.int64).ravel() for g in groups]
-    if weights is None or len(weights) != len(groups):
-        raise ValueError(f"group_weights must give one weight per group ({len(groups)})")
-    if any(len(g) == 0 for g in groups) or \
-            not np.array_equal(np.sort(np.concatenate(groups)), np.arange(n)):
-        raise ValueError(f"groups must split the observation's components 0..{n - 1}, "
-                         f"each in exactly one group")
-    w = np.asarray(weights, dtype=np.float64)
-    if not np.isfinite(w).all() or np.any(w < 0) or w.sum() <= 0:
-        raise ValueError(f"group_weights must be >= 0 with a positive sum, got {weights!r}")
-    return groups, list(w)
+    def _reliability_update(self, element, reward):
+        """eq 7 along the backward links from the element used for the last decision:
+        R += rho r (1 - R) when r > 0, R += rho r R when r < 0."""
+        rho, scale, j = self.config.reliability_rate, self._rel_scale, element
+        while j >= 0:
+            r = self._rel[j] * scale
+            r += rho * reward * ((1.0 - r) if reward > 0 else r)
+            self._rel[j] = r / scale
+            j = int(self._prev[j])
+
+    def _forget(self, k):
+        """Removes element k, splicing its episode's links around it."""
+        p, n = int(self._prev[k]), int(self._next[k])
+        if p >= 0:
+            self._next[p] = n
+        if n >= 0:
+            self._prev[n] = p
+        if self._tail == k:
+            self._tail = p
+        if self._referred == k:
+            self._referred = p
+        keep = self._table != k
+        self._table, self._weights = self._table[keep], self._weights[keep]
+        self._sum -= self._x[k]
+        self._sumsq -= self._x[k] * self._x[k]
+        self._prev[k] = self._next[k] = -1
