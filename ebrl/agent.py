@@ -45,11 +45,12 @@ class Agent:
         self.obs_dim, self.action_dim = n, _ = int(obs_dim), int(action_dim)
         self.rng = np.random.default_rng(seed)
         M = config.memory_size
-        # Memory (2.1): inputs (float64 for the variance sums, float32 [x; x^2] stored
-        # one feature per row for the similarity product), actions, utility,
+        # Memory (2.1): inputs (float64 [x, x^2] for the variance sums, float32
+        # [x; x^2; 1] one feature per row for the similarity product), actions, utility,
         # reliability, time stamps, links.
-        self._x = np.zeros((M, n))
-        self._aug = np.zeros((2 * n, M), dtype=np.float32)
+        self._xs = np.zeros((M, 2 * n))  # [x, x^2] per element, for the running sums
+        self._x = self._xs[:, :n]
+        self._aug = np.ones((2 * n + 1, M), dtype=np.float32)
         self._action = np.zeros((M, self.action_dim))
         self._utility = np.zeros(M)
         self._rel = np.zeros(M)  # true reliability = self._rel * self._rel_scale
@@ -58,7 +59,8 @@ class Agent:
         self._next = np.full(M, -1, dtype=np.int64)
         self._prev = np.full(M, -1, dtype=np.int64)
         self._size = 0
-        self._sum, self._sumsq = np.zeros(n), np.zeros(n)
+        self._stats = np.zeros(2 * n)  # running sums of x and x^2, for eq 2's V_i
+        self._sum, self._sumsq = self._stats[:n], self._stats[n:]
         # Modalities (eq 3-4): a 0/1 membership matrix, weights normalised to sum 1.
         if groups is None:
             groups, group_weights = [np.arange(n)], [1.0]
@@ -72,13 +74,23 @@ class Agent:
         w = np.asarray(group_weights, dtype=np.float64)
         if np.any(w < 0) or w.sum() <= 0:
             raise ValueError("group_weights must be non-negative with a positive sum")
-        # Row j scaled by 1 / (2 n_j): the product then gives eq 4's radicand.
-        self._member = (member / (2.0 * member.sum(axis=0))).T.copy()
+        # Group j's row of the product [m; m^2; 1] -> eq 4's radicand, for input x, is
+        # (-2 x / V, 1 / V, sum x^2 / V) over its components, each scaled by 1 / (2 n_j):
+        # a linear map of c / V with c = [x, x^2, 1], kept as the matrix _to_w.
+        G = len(groups)
+        scaled = (member / (2.0 * member.sum(axis=0))).T  # (G, n)
+        to_w = np.zeros((3 * n, G, 2 * n + 1))
+        for i in range(n):
+            to_w[i, :, i] = -2.0 * scaled[:, i]
+            to_w[2 * n + i, :, n + i] = to_w[n + i, :, 2 * n] = scaled[:, i]
+        self._to_w = to_w.reshape(3 * n, -1).astype(np.float32)
+        self._c = np.ones(3 * n)
+        self._v = np.zeros(3 * n, dtype=np.float32)
         self._group_w = (w / w.sum()).astype(np.float32)
-        self._w = np.zeros((len(groups), 2 * n), dtype=np.float32)
+        self._radius = np.inf  # see _nearest
         # Recall table (2.2), the episode being recorded, the last decision.
         self._table = np.zeros(0, dtype=np.int64)
-        self._weights = np.zeros(0, dtype=np.float32)
+        self._dist = np.zeros(0, dtype=np.float32)  # 1 - W of each entry
         self._tail = -1        # the current episode's latest element
         self._referred = -1    # the trial's latest element used for a decision (eq 7)
         self._obs = self._act = None
@@ -108,52 +120,84 @@ class Agent:
         return np.maximum(self._sumsq / k - mean * mean, self.config.variance_floor)
 
     def recall_table(self):
-        return self._table.copy(), self._weights.copy()
+        """(element slots, weights W) of the recall table."""
+        return self._table.copy(), 1.0 - self._dist.astype(np.float64)
 
     # -- acting --------------------------------------------------------------------
-    def _similarities(self, x):
-        """eq 2-4 for x against every stored element, as one float32 product."""
-        inv = 1.0 / self.variance
-        n, w, member = self.obs_dim, self._w, self._member
-        # sum_i (x_i - m_i)^2 / V_i = sum x^2/V - 2 sum x m / V + sum m^2 / V, per group.
-        np.multiply(member, -2.0 * x * inv, out=w[:, :n], casting="unsafe")
-        np.multiply(member, inv, out=w[:, n:], casting="unsafe")
-        q = member @ (x * x * inv)
+    def _distances(self, x):
+        """1 - S(M_j, x) (eq 2-4) for every stored element, as one float32 product.
+
+        sum_i (x_i - m_i)^2 / V_i = sum m^2/V - 2 sum x m / V + sum x^2/V per group: the
+        memory holds [m; m^2; 1] one feature per row, so one product gives every radicand.
+        """
+        n, c, v = self.obs_dim, self._c, self._v
+        c[:n] = x
+        np.multiply(x, x, out=c[n:2 * n])
+        m = self._stats / self._size
+        var = m[n:] - m[:n] * m[:n]
+        np.maximum(var, self.config.variance_floor, out=var)
+        np.divide(c.reshape(3, n), var, out=v.reshape(3, n), casting="unsafe")
+        w = (v @ self._to_w).reshape(-1, 2 * n + 1)
         d2 = w @ self._aug[:, : self._size]
-        d2 += q.astype(np.float32)[:, None]
         np.maximum(d2, 0.0, out=d2)
         np.sqrt(d2, out=d2)
-        return 1.0 - self._group_w @ d2
+        return d2[0] if len(d2) == 1 else self._group_w @ d2
+
+    def _similarities(self, x):
+        """eq 2-4 for x against every stored element."""
+        return 1.0 - self._distances(x)
+
+    def _nearest(self, d):
+        """The recall_size smallest of d, ties to the lower slot.
+
+        Sorting only the elements within self._radius is exact, as every other element is
+        farther, and cheaper than a selection over the whole memory; the radius follows
+        the data so that a few times recall_size elements lie within it. It changes the
+        cost, never the result."""
+        k = self.config.recall_size
+        near = (d <= self._radius).nonzero()[0]
+        if not k <= len(near) <= 16 * k:
+            m = min(4 * k, len(d) - 1)
+            self._radius = float(d[np.argpartition(d, m)[m]])
+            near = (d <= self._radius).nonzero()[0]  # all within it, ties included
+        order = d[near].argsort(kind="stable")
+        if len(near) > 8 * k:
+            self._radius = float(d[near[order[4 * k]]])
+        elif len(near) < 2 * k:
+            self._radius *= 1.05
+        return near[order[:k]]
 
     def act(self, obs, readings=None):
         """The action for observation obs (1-D). The fallback gets readings, or obs."""
-        x = np.asarray(obs, dtype=np.float64)
+        x = np.array(obs, dtype=np.float64)
         if x.shape != (self.obs_dim,):
             raise ValueError(f"observation must have shape ({self.obs_dim},), got {x.shape}")
         if not np.isfinite(x).all():
             raise ValueError("observation contains NaN or inf")
         c = self.config
-        if self._size:
-            s = self._similarities(x)
+        if not self._size:
+            self._c[: self.obs_dim] = x
+            np.multiply(x, x, out=self._c[self.obs_dim: 2 * self.obs_dim])
+        else:
+            # Worked on distances 1 - W and 1 - S: eq 1 is affine, so it holds unchanged.
+            d = self._distances(x)
             # eq 1: entries follow their forward links; those at an episode's end drop out.
             ahead = self._next[self._table]
-            keep = ahead >= 0
-            ahead, w = ahead[keep], self._weights[keep]
-            w = eq1(w, s[ahead], c.alpha)
+            if -1 in ahead.tolist():
+                keep = ahead >= 0
+                ahead, self._dist = ahead[keep], self._dist[keep]
             # Every element is a candidate with its similarity; an advanced entry keeps
             # the larger of its eq 1 weight and its similarity.
-            s[ahead] = np.maximum(s[ahead], w)
-            if self._size > c.recall_size:
-                top = np.argpartition(s, self._size - c.recall_size)[self._size - c.recall_size:]
-            else:
-                top = np.arange(self._size)
-            self._table, self._weights = top, s[top]
+            d_ahead = d[ahead]
+            d[ahead] = np.minimum(d_ahead, eq1(self._dist, d_ahead, c.alpha))
+            top = self._nearest(d) if self._size > c.recall_size else np.arange(self._size)
+            self._table, self._dist = top, d[top]
         explore = self.rng.random() < c.exploration_rate
         action = None
         if len(self._table) and not explore:
             # eq 5: the entry maximising min(W_i, U_i), if it clears the threshold.
-            measure = eq5(self._weights, self._utility[self._table])
-            best = int(np.argmax(measure))
+            measure = eq5(1.0 - self._dist, self._utility[self._table])
+            best = int(measure.argmax())
             if measure[best] > c.policy_threshold:
                 element = int(self._table[best])
                 action = self._action[element].copy()
@@ -178,17 +222,15 @@ class Agent:
             raise ValueError("reward must be finite")
         c = self.config
         if self._size == c.memory_size:
-            slot = int(np.argmin(self._rel))
+            slot = int(self._rel.argmin())
             self._forget(slot)
         else:
             slot = self._size
             self._size += 1
-        x = self._obs
-        self._x[slot] = x
-        self._aug[: self.obs_dim, slot] = x
-        self._aug[self.obs_dim:, slot] = x * x
-        self._sum += x
-        self._sumsq += x * x
+        xs = self._c[: 2 * self.obs_dim]  # [x, x^2] of the last act's input, written by act
+        self._xs[slot] = xs
+        self._aug[: 2 * self.obs_dim, slot] = xs
+        self._stats += xs
         self._action[slot] = self._act
         self._utility[slot] = c.initial_utility
         self._rel[slot] = c.initial_reliability / self._rel_scale
@@ -216,7 +258,7 @@ class Agent:
         """The next act starts a new episode, with an empty recall table."""
         self._tail = self._referred = -1
         self._table = np.zeros(0, dtype=np.int64)
-        self._weights = np.zeros(0, dtype=np.float32)
+        self._dist = np.zeros(0, dtype=np.float32)
 
     def _utility_update(self, element, reward):
         """eq 6: U_j += r * gamma^(t - t_j) along the backward links from the newest
@@ -250,8 +292,8 @@ class Agent:
             self._tail = p
         if self._referred == k:
             self._referred = p
-        keep = self._table != k
-        self._table, self._weights = self._table[keep], self._weights[keep]
-        self._sum -= self._x[k]
-        self._sumsq -= self._x[k] * self._x[k]
+        if k in self._table.tolist():
+            keep = self._table != k
+            self._table, self._dist = self._table[keep], self._dist[keep]
+        self._stats -= self._xs[k]
         self._prev[k] = self._next[k] = -1

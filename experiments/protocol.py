@@ -87,8 +87,10 @@ def make_agent(spec, env):
         groups = [np.arange(n_range), np.arange(n_range, obs_dim)]
         weights = [0.7, 0.3]
     _, agent_seed = seeds_for(spec.seed)
-    return ebrl.Agent(spec.agent_config(), obs_dim, env.action_spec().shape[0],
-                      ebrl.intrinsic.fallback_for(spec.robot, spec.condition),
+    config = spec.agent_config()
+    fallback = ebrl.intrinsic.fallback_for(spec.robot, spec.condition,
+                                           config.intrinsic_random_rate, config.random_sd)
+    return ebrl.Agent(config, obs_dim, env.action_spec().shape[0], fallback,
                       groups=groups, group_weights=weights, seed=agent_seed)
 
 

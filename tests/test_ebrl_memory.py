@@ -66,3 +66,23 @@ def test_cost_is_flat_and_memory_capped_over_long_runs():
         ag.learn(1.0 if step % 300 == 299 else 0.0, step % 300 == 299)
     assert ag.size == 64 and ag.steps == 20000
     assert np.isfinite(ag.reliability).all() and (ag.reliability > 0).all()
+
+
+def test_recall_selection_is_the_stable_top_n_r_whatever_the_radius():
+    """_nearest, which sorts only elements within an adaptive radius, must give exactly the
+    N_r smallest distances, ties to the lower slot, on data with and without ties."""
+    rng = np.random.default_rng(3)
+    ag = ebrl.Agent(ebrl.Config(memory_size=512, recall_size=7), 2, 1, intrinsic.RandomWalk(1), seed=0)
+    for trial in range(400):
+        kind = trial % 4
+        if kind == 0:
+            d = rng.random(512).astype(np.float32)
+        elif kind == 1:  # many ties, including at the cut
+            d = rng.integers(0, 5, 512).astype(np.float32)
+        elif kind == 2:  # spread over orders of magnitude: the radius is often wrong
+            d = (10.0 ** rng.uniform(-6, 2, 512)).astype(np.float32)
+        else:  # all equal
+            d = np.full(512, 0.5, dtype=np.float32)
+        want = np.argsort(d, kind="stable")[:7]
+        got = ag._nearest(d)
+        np.testing.assert_array_equal(got, want)

@@ -199,3 +199,22 @@ def test_offscreen_frame_renders_with_no_error_at_exit(backend, library):
                           text=True, timeout=120, env=backend_environment(backend))
     assert proc.returncode == 0, proc.stderr
     assert proc.stderr.strip() == "", proc.stderr
+
+
+def test_intrinsic_parameters_reach_the_fallback():
+    """--set intrinsic_random_rate / random_sd must change the behaviour a run uses."""
+    import tasks
+    from ebrl import intrinsic
+    from experiments import protocol
+    env = tasks.load("two_wheel", seed=0)
+    try:
+        spec = protocol.RunSpec("two_wheel", "avoidance", 0, 100,
+                                overrides=(("intrinsic_random_rate", 0.0), ("random_sd", 0.1)))
+        fb = protocol.make_agent(spec, env).fallback
+        assert (fb.random_rate, fb.sd) == (0.0, 0.1)
+        rng = np.random.default_rng(0)
+        readings = np.array([1.0, 0, 0, 0, 0, 0, 0])
+        # With the random replacement off, eq 8 acts every time.
+        assert all(fb(readings, rng)[0] == intrinsic.avoid_two_wheel(readings) for _ in range(50))
+    finally:
+        env.close()
