@@ -190,7 +190,8 @@ class Agent:
             # the larger of its eq 1 weight and its similarity.
             d_ahead = d[ahead]
             d[ahead] = np.minimum(d_ahead, eq1(self._dist, d_ahead, c.alpha))
-            top = self._nearest(d) if self._size > c.recall_size else np.arange(self._size)
+            top = (self._nearest(d) if self._size > c.recall_size
+                   else d.argsort(kind="stable"))  # ordered by weight, ties to the lower slot
             self._table, self._dist = top, d[top]
         explore = self.rng.random() < c.exploration_rate
         action = None

@@ -124,6 +124,9 @@ def build_parser():
     w.add_argument("--steps", type=positive_int, default=None)
     w.add_argument("--workers", type=positive_int, default=os.cpu_count() or 1)
     w.add_argument("--out", type=pathlib.Path, default=pathlib.Path("sweeps"))
+    w.add_argument("--baseline", type=pathlib.Path, default=None,
+                   help="a run folder (e.g. results) whose runs at the default value join the "
+                        "table, for the same robots, conditions, seeds and budgets")
     w.add_argument("--no-progress", action="store_true")
 
     d = sub.add_parser("demo", help="a quick protocol, its report and one video")
@@ -185,6 +188,7 @@ def cmd_bench(args):
 
 
 def cmd_sweep(args):
+    import ebrl
     from experiments import report, results, runner
     try:
         values = [_override(f"{args.param}={v}") for v in args.values.split(",") if v.strip()]
@@ -198,12 +202,24 @@ def cmd_sweep(args):
                                                          args.steps or paper.BUDGETS, [(n, v)]))
              for n, v in values]
     try:
+        baseline = None
+        if args.baseline is not None:  # the default's runs, checked before running any
+            specs = runner.plan(robots, conditions, args.seeds, args.steps or paper.BUDGETS)
+            if runner.pending(args.baseline, specs):
+                raise results.ResultsError(f"{args.baseline} lacks some of these runs at the "
+                                           f"default {args.param}; run them there first")
+            baseline = results.load_runs(args.baseline, specs)
         for folder, specs in plans:  # refuse damaged or mismatched folders before running any
             runner.pending(folder, specs)
         for folder, specs in plans:
             runner.run(specs, folder, workers=args.workers, progress=not args.no_progress)
             report.build(folder)
-        path = report.sweep_table(args.out, args.param, [(v, f) for (_, v), (f, _) in zip(values, plans)])
+        rows = [(v, results.load_runs(f)) for (_, v), (f, _) in zip(values, plans)]
+        if baseline is not None:
+            default = getattr(ebrl.Config(), args.param)
+            rows = sorted(rows + [(f"{default} (default, {args.baseline})", baseline)],
+                          key=lambda row: float(str(row[0]).split()[0]))
+        path = report.sweep_table(args.out, args.param, rows)
     except results.ResultsError as e:
         return _fail(str(e))
     print(f"sweep: {path}")

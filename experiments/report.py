@@ -323,13 +323,14 @@ def build(root):
     return root / "REPORT.md"
 
 
-def sweep_table(out, param, folders):
-    """SWEEP.md under out: each group's figures at every value of param."""
+def sweep_table(out, param, rows):
+    """SWEEP.md under out: each group's figures at every value of param; rows are
+    (value, runs as results.load_runs gives them)."""
     lines = [f"# Sweep over {param}", "",
              "| " + param + " | robot | condition | seeds | first-trial steps | steps per trial (95% CI) "
              "| shrink | goals min / median |", "|---:|---|---|---:|---:|---|---:|---|"]
-    for value, folder in folders:
-        s = results.summarize(results.load_runs(folder))
+    for value, runs in rows:
+        s = results.summarize(runs)
         for g in s["groups"]:
             p = g["steps_per_trial"]
             lines.append(f"| {value} | {g['robot']} | {g['condition']} | {g['seeds']} "

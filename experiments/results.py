@@ -136,13 +136,16 @@ def existing(root, spec):
     return "done"
 
 
-def load_runs(root):
-    """Every complete run under root, as (robot, condition, seed) -> run.json dict."""
+def load_runs(root, specs=None):
+    """Every complete run under root (or only those of specs), as
+    (robot, condition, seed) -> run.json dict."""
     root = pathlib.Path(root)
     if not root.is_dir():
         raise ResultsError(f"no results folder at {root}")
     runs = {}
-    for path in sorted(root.glob("*/*/seed_*/run.json")):
+    paths = (sorted(root.glob("*/*/seed_*/run.json")) if specs is None
+             else [run_dir(root, spec) / "run.json" for spec in specs])
+    for path in paths:
         run = read_run_json(path)
         p = run["parameters"]
         runs[(p["robot"], p["condition"], p["seed"])] = run
