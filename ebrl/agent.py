@@ -60,7 +60,6 @@ class Agent:
         self._prev = np.full(M, -1, dtype=np.int64)
         self._size = 0
         self._stats = np.zeros(2 * n)  # running sums of x and x^2, for eq 2's V_i
-        self._sum, self._sumsq = self._stats[:n], self._stats[n:]
         # Modalities (eq 3-4): a 0/1 membership matrix, weights normalised to sum 1.
         if groups is None:
             groups, group_weights = [np.arange(n)], [1.0]
@@ -84,7 +83,7 @@ class Agent:
             to_w[i, :, i] = -2.0 * scaled[:, i]
             to_w[2 * n + i, :, n + i] = to_w[n + i, :, 2 * n] = scaled[:, i]
         self._to_w = to_w.reshape(3 * n, -1).astype(np.float32)
-        self._c = np.ones(3 * n)
+        self._c = np.ones(3 * n)  # [x, x^2, 1] of the current input (see _set_input)
         self._v = np.zeros(3 * n, dtype=np.float32)
         self._group_w = (w / w.sum()).astype(np.float32)
         self._radius = np.inf  # see _nearest
@@ -93,7 +92,7 @@ class Agent:
         self._dist = np.zeros(0, dtype=np.float32)  # 1 - W of each entry
         self._tail = -1        # the current episode's latest element
         self._referred = -1    # the trial's latest element used for a decision (eq 7)
-        self._obs = self._act = None
+        self._act = None  # the last act's action, until learn stores it
         self.steps = 0
         self.used_memory = False
         self.memory_decisions = 0
@@ -115,28 +114,32 @@ class Agent:
     @property
     def variance(self):
         """eq 2's V_i over the stored inputs, kept from running sums, floored."""
-        k = max(self._size, 1)
-        mean = self._sum / k
-        return np.maximum(self._sumsq / k - mean * mean, self.config.variance_floor)
+        n = self.obs_dim
+        m = self._stats / max(self._size, 1)
+        var = m[n:] - m[:n] * m[:n]
+        return np.maximum(var, self.config.variance_floor, out=var)
 
     def recall_table(self):
         """(element slots, weights W) of the recall table."""
         return self._table.copy(), 1.0 - self._dist.astype(np.float64)
 
     # -- acting --------------------------------------------------------------------
-    def _distances(self, x):
-        """1 - S(M_j, x) (eq 2-4) for every stored element, as one float32 product.
+    def _set_input(self, x):
+        """Keeps [x, x^2] in self._c: the input's terms of eq 4's expansion, and what
+        learn stores."""
+        n = self.obs_dim
+        self._c[:n] = x
+        np.multiply(x, x, out=self._c[n:2 * n])
+
+    def _distances(self):
+        """1 - S(M_j, x) (eq 2-4) of the input x (set by _set_input) for every stored
+        element, as one float32 product.
 
         sum_i (x_i - m_i)^2 / V_i = sum m^2/V - 2 sum x m / V + sum x^2/V per group: the
         memory holds [m; m^2; 1] one feature per row, so one product gives every radicand.
         """
-        n, c, v = self.obs_dim, self._c, self._v
-        c[:n] = x
-        np.multiply(x, x, out=c[n:2 * n])
-        m = self._stats / self._size
-        var = m[n:] - m[:n] * m[:n]
-        np.maximum(var, self.config.variance_floor, out=var)
-        np.divide(c.reshape(3, n), var, out=v.reshape(3, n), casting="unsafe")
+        n, v = self.obs_dim, self._v
+        np.divide(self._c.reshape(3, n), self.variance, out=v.reshape(3, n), casting="unsafe")
         w = (v @ self._to_w).reshape(-1, 2 * n + 1)
         d2 = w @ self._aug[:, : self._size]
         np.maximum(d2, 0.0, out=d2)
@@ -145,7 +148,8 @@ class Agent:
 
     def _similarities(self, x):
         """eq 2-4 for x against every stored element."""
-        return 1.0 - self._distances(x)
+        self._set_input(x)
+        return 1.0 - self._distances()
 
     def _nearest(self, d):
         """The recall_size smallest of d, ties to the lower slot.
@@ -175,12 +179,10 @@ class Agent:
         if not np.isfinite(x).all():
             raise ValueError("observation contains NaN or inf")
         c = self.config
-        if not self._size:
-            self._c[: self.obs_dim] = x
-            np.multiply(x, x, out=self._c[self.obs_dim: 2 * self.obs_dim])
-        else:
+        self._set_input(x)
+        if self._size:
             # Worked on distances 1 - W and 1 - S: eq 1 is affine, so it holds unchanged.
-            d = self._distances(x)
+            d = self._distances()
             # eq 1: entries follow their forward links; those at an episode's end drop out.
             ahead = self._next[self._table]
             if -1 in ahead.tolist():
@@ -210,13 +212,13 @@ class Agent:
             self.fallback_decisions += 1
         else:
             self.memory_decisions += 1
-        self._obs, self._act = x, action
+        self._act = action
         return action
 
     # -- learning ------------------------------------------------------------------
     def learn(self, reward, last=False):
         """Stores the last act's experience, learns from reward, ends the episode if last."""
-        if self._obs is None:
+        if self._act is None:
             raise ValueError("learn() needs an act() first")
         reward = float(reward)
         if reward != reward or abs(reward) == float("inf"):
@@ -228,7 +230,7 @@ class Agent:
         else:
             slot = self._size
             self._size += 1
-        xs = self._c[: 2 * self.obs_dim]  # [x, x^2] of the last act's input, written by act
+        xs = self._c[: 2 * self.obs_dim]  # [x, x^2] of the last act's input
         self._xs[slot] = xs
         self._aug[: 2 * self.obs_dim, slot] = xs
         self._stats += xs
@@ -251,7 +253,7 @@ class Agent:
             self._rel *= self._rel_scale
             self._rel_scale = 1.0
         self.steps += 1
-        self._obs = self._act = None
+        self._act = None
         if last:
             self.end_episode()
 

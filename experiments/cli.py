@@ -135,12 +135,17 @@ def build_parser():
     return p
 
 
-def cmd_run(args):
-    from experiments import report, results, runner
+def _plan(args, overrides=()):
+    """The specs that --robot, --condition, --seeds and --steps select."""
+    from experiments import runner
     robots = paper.ROBOTS if args.robot == "all" else (args.robot,)
     conditions = paper.CONDITIONS if args.condition == "all" else (args.condition,)
-    steps = args.steps or paper.BUDGETS
-    specs = runner.plan(robots, conditions, args.seeds, steps, args.set)
+    return runner.plan(robots, conditions, args.seeds, args.steps or paper.BUDGETS, overrides)
+
+
+def cmd_run(args):
+    from experiments import report, results, runner
+    specs = _plan(args, args.set)
     try:
         ran = runner.run(specs, args.out, workers=args.workers, backend=args.backend,
                          progress=not args.no_progress)
@@ -196,15 +201,11 @@ def cmd_sweep(args):
         return _fail(str(e))
     if not values:
         return _fail("--values is empty")
-    robots = paper.ROBOTS if args.robot == "all" else (args.robot,)
-    conditions = paper.CONDITIONS if args.condition == "all" else (args.condition,)
-    plans = [(args.out / f"{args.param}_{v}", runner.plan(robots, conditions, args.seeds,
-                                                         args.steps or paper.BUDGETS, [(n, v)]))
-             for n, v in values]
+    plans = [(args.out / f"{args.param}_{v}", _plan(args, [(n, v)])) for n, v in values]
     try:
         baseline = None
         if args.baseline is not None:  # the default's runs, checked before running any
-            specs = runner.plan(robots, conditions, args.seeds, args.steps or paper.BUDGETS)
+            specs = _plan(args)
             if runner.pending(args.baseline, specs):
                 raise results.ResultsError(f"{args.baseline} lacks some of these runs at the "
                                            f"default {args.param}; run them there first")
@@ -217,8 +218,9 @@ def cmd_sweep(args):
         rows = [(v, results.load_runs(f)) for (_, v), (f, _) in zip(values, plans)]
         if baseline is not None:
             default = getattr(ebrl.Config(), args.param)
-            rows = sorted(rows + [(f"{default} (default, {args.baseline})", baseline)],
-                          key=lambda row: float(str(row[0]).split()[0]))
+            rows = sorted(rows + [(default, baseline)], key=lambda row: row[0])
+            rows = [(f"{v} (default, {args.baseline})" if runs is baseline else v, runs)
+                    for v, runs in rows]
         path = report.sweep_table(args.out, args.param, rows)
     except results.ResultsError as e:
         return _fail(str(e))

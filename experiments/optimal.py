@@ -116,10 +116,15 @@ def shortest_path(start, field, obstacles, goal, radius):
     return best, np.array(path[::-1])
 
 
+def _segments(path):
+    """The path's non-empty segments, as (n, 2) displacement vectors."""
+    seg = np.diff(path, axis=0)
+    return seg[np.linalg.norm(seg, axis=1) > 1e-9]
+
+
 def two_wheel_steps(path, heading=0.0):
     """ceil(L / 2 + total turning) along the path, from the start heading."""
-    seg = np.diff(path, axis=0)
-    seg = seg[np.linalg.norm(seg, axis=1) > 1e-9]
+    seg = _segments(path)
     angles = np.arctan2(seg[:, 1], seg[:, 0])
     turns = np.abs(np.angle(np.exp(1j * np.diff(np.concatenate([[heading], angles])))))
     return int(math.ceil(np.linalg.norm(seg, axis=1).sum() / 2.0 + turns.sum() - 1e-9))
@@ -131,8 +136,7 @@ CORNER = math.radians(45)  # the floating plan stops where the path bends more t
 def floating_steps(path, max_acceleration=0.2):
     """Stop-at-every-corner bang-bang plan: sum of 2 ceil(sqrt(L / a)) over the legs
     between bends of more than CORNER (the arc points around a corner are one bend)."""
-    seg = np.diff(path, axis=0)
-    seg = seg[np.linalg.norm(seg, axis=1) > 1e-9]
+    seg = _segments(path)
     legs, current, heading = [], np.zeros(2), None
     for d in seg:
         angle = math.atan2(d[1], d[0])

@@ -6,6 +6,7 @@ agent steps is spent. `execute` computes a run and returns plain data, so the
 same function serves a local process pool and a Ray cluster; the driver writes it.
 """
 import dataclasses
+import functools
 import time
 
 import numpy as np
@@ -48,8 +49,10 @@ class RunSpec:
         }
 
 
+@functools.cache
 def model_digest(robot):
-    """A digest of the composed MJCF, so results made with another model never match."""
+    """A digest of the composed MJCF, so results made with another model never match.
+    Computed once per process (composing takes about 20 ms, and every spec asks)."""
     import hashlib
 
     import models
@@ -94,11 +97,17 @@ def make_agent(spec, env):
                       groups=groups, group_weights=weights, seed=agent_seed)
 
 
+@functools.cache
+def _reading_scale():
+    # Imported here, not at the top: tasks sets MUJOCO_GL, which rendering picks first.
+    from tasks.navigation import SENSOR_LEVELS
+    return 1.0 / SENSOR_LEVELS
+
+
 def agent_input(observation):
     """(agent observation, readings for the fallback): readings scaled to [0, 1],
     then the velocity in units/step for the floating robot."""
-    from tasks.navigation import SENSOR_LEVELS
-    readings = observation["range"] * (1.0 / SENSOR_LEVELS)
+    readings = observation["range"] * _reading_scale()
     velocity = observation.get("velocity")
     return (readings if velocity is None else np.concatenate([readings, velocity])), readings
 
@@ -150,12 +159,16 @@ def compact(positions):
     return np.rint(np.asarray(positions, dtype=np.float64) * TRACE_SCALE).astype(np.int16)
 
 
+def trial_lengths(trial_ends):
+    """Steps of each completed trial, from the steps at which they ended."""
+    return np.diff(np.concatenate([[0], np.asarray(trial_ends, dtype=np.int64)]))
+
+
 def metrics(trial_ends):
     """A run's figures: see the README's definitions."""
-    ends = np.asarray(trial_ends, dtype=np.int64)
-    lengths = np.diff(np.concatenate([[0], ends]))
+    lengths = trial_lengths(trial_ends)
     return {
-        "goals": int(len(ends)),
+        "goals": int(len(lengths)),
         "first_trial_steps": int(lengths[0]) if len(lengths) else None,
         "steps_per_trial": float(lengths.mean()) if len(lengths) else None,
         "last_trial_steps": int(lengths[-1]) if len(lengths) else None,

@@ -1,4 +1,5 @@
 """`ebrl report DIR`: summary.json, REPORT.md and the figures, from the run folders."""
+import functools
 import json
 import os
 import pathlib
@@ -7,31 +8,23 @@ import numpy as np
 
 from experiments import paper, results
 
-# The room as drawn in the figures, read from the MJCF so there is one source.
-_ROOM = None
-
-
+@functools.cache
 def room_rectangles():
-    """(field, obstacles, goal) in paper units, read from models/room.xml."""
-    global _ROOM
-    if _ROOM is None:
-        import mujoco
+    """(field, obstacles, goal) in paper units, read from models/room.xml, as
+    (x0, x1, y0, y1) rectangles: the room as drawn, from the one source."""
+    import mujoco
 
-        import models
-        m = mujoco.MjModel.from_xml_path(str(models.ROOM_FILE))
-        obstacles = []
-        for i in range(m.ngeom):
-            name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, i) or ""
-            if name.startswith("block_"):
-                c, h = m.geom_pos[i, :2] / models.UNIT, m.geom_size[i, :2] / models.UNIT
-                obstacles.append((c[0] - h[0], c[0] + h[0], c[1] - h[1], c[1] + h[1]))
-        floor = m.geom("floor")
-        c, h = floor.pos[:2] / models.UNIT, floor.size[:2] / models.UNIT
-        field = (c[0] - h[0], c[0] + h[0], c[1] - h[1], c[1] + h[1])
-        g = m.site("goal")
-        c, h = g.pos[:2] / models.UNIT, g.size[:2] / models.UNIT
-        _ROOM = (field, obstacles, (c[0] - h[0], c[0] + h[0], c[1] - h[1], c[1] + h[1]))
-    return _ROOM
+    import models
+
+    def rect(pos, size):
+        (cx, cy), (hx, hy) = pos[:2] / models.UNIT, size[:2] / models.UNIT
+        return cx - hx, cx + hx, cy - hy, cy + hy
+
+    m = mujoco.MjModel.from_xml_path(str(models.ROOM_FILE))
+    obstacles = [rect(m.geom(i).pos, m.geom(i).size) for i in range(m.ngeom)
+                 if m.geom(i).name.startswith("block_")]
+    floor, goal = m.geom("floor"), m.site("goal")
+    return rect(floor.pos, floor.size), obstacles, rect(goal.pos, goal.size)
 
 
 def draw_room(ax):

@@ -82,10 +82,10 @@ def run_dir(root, spec):
 def write_run(root, spec, result, versions_info):
     """Writes one run's files; run.json goes last, so it marks the run complete."""
     folder = run_dir(root, spec)
-    config = dict(spec.parameters(), versions=versions_info)
-    atomic_write(folder / "config.json", dumps(config))
+    parameters = spec.parameters()
+    atomic_write(folder / "config.json", dumps(dict(parameters, versions=versions_info)))
     ends = result["trial_ends"]
-    lengths = np.diff(np.concatenate([[0], ends]))
+    lengths = protocol.trial_lengths(ends)
     rows = io.StringIO()
     w = csv.writer(rows, lineterminator="\n")
     w.writerow(["trial", "steps", "cumulative_steps", "reached"])
@@ -99,7 +99,7 @@ def write_run(root, spec, result, versions_info):
     np.savez_compressed(buf, trace=result["trace"], starts=result["starts"],
                         trial_ends=ends, scale=protocol.TRACE_SCALE)
     atomic_write(folder / "trace.npz", buf.getvalue())
-    run = {"status": "complete", "parameters": spec.parameters(),
+    run = {"status": "complete", "parameters": parameters,
            "metrics": protocol.metrics(ends), "seconds": round(result["seconds"], 3),
            "memory_decisions": result["memory_decisions"]}
     atomic_write(folder / "run.json", dumps(run))
