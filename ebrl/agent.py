@@ -17,6 +17,8 @@ entry exceeds the threshold or the agent explores. learn(r) stores (s_t, a_t) as
 next element of the current episode, forgetting the least reliable element when the
 memory is full, then applies eq 6 and eq 7 when r != 0 and decays every reliability.
 """
+import math
+
 import numpy as np
 
 from ebrl.config import Config
@@ -47,7 +49,8 @@ class Agent:
         M = config.memory_size
         # Memory (2.1): inputs (float64 [x, x^2] for the variance sums, float32
         # [x; x^2; 1] one feature per row for the similarity product), actions, utility,
-        # reliability, time stamps, links.
+        # reliability, time stamps, links (backward links and time stamps as Python lists:
+        # they are read one at a time, along the chains of eq 6 and eq 7).
         self._xs = np.zeros((M, 2 * n))  # [x, x^2] per element, for the running sums
         self._x = self._xs[:, :n]
         self._aug = np.ones((2 * n + 1, M), dtype=np.float32)
@@ -55,9 +58,9 @@ class Agent:
         self._utility = np.zeros(M)
         self._rel = np.zeros(M)  # true reliability = self._rel * self._rel_scale
         self._rel_scale = 1.0
-        self._time = np.zeros(M, dtype=np.int64)
+        self._time = [0] * M
         self._next = np.full(M, -1, dtype=np.int64)
-        self._prev = np.full(M, -1, dtype=np.int64)
+        self._prev = [-1] * M
         self._size = 0
         self._stats = np.zeros(2 * n)  # running sums of x and x^2, for eq 2's V_i
         # Modalities (eq 3-4): a 0/1 membership matrix, weights normalised to sum 1.
@@ -86,6 +89,19 @@ class Agent:
         self._c = np.ones(3 * n)  # [x, x^2, 1] of the current input (see _set_input)
         self._v = np.zeros(3 * n, dtype=np.float32)
         self._group_w = (w / w.sum()).astype(np.float32)
+        # Views and buffers reused every step (one allocation each, not one per step).
+        self._c3, self._v3 = self._c.reshape(3, n), self._v.reshape(3, n)
+        self._w = np.zeros((G, 2 * n + 1), dtype=np.float32)
+        self._w_flat = self._w.reshape(-1)
+        self._d2 = np.zeros((G, M), dtype=np.float32)
+        self._d = np.zeros(M, dtype=np.float32)
+        self._mean = np.zeros(2 * n)
+        self._mean1, self._mean2 = self._mean[:n], self._mean[n:]
+        self._var = np.full(n, float(config.variance_floor))  # eq 2's V_i, see _update_variance
+        self._floor = np.array(config.variance_floor)
+        self._x_now, self._xx_now = self._c[:n], self._c[n:2 * n]
+        self._xs_now = self._c[:2 * n]  # [x, x^2]: what learn stores
+        self._aug_x = self._aug[:2 * n]
         self._radius = np.inf  # see _nearest
         # Recall table (2.2), the episode being recorded, the last decision.
         self._table = np.zeros(0, dtype=np.int64)
@@ -114,10 +130,16 @@ class Agent:
     @property
     def variance(self):
         """eq 2's V_i over the stored inputs, kept from running sums, floored."""
-        n = self.obs_dim
-        m = self._stats / max(self._size, 1)
-        var = m[n:] - m[:n] * m[:n]
-        return np.maximum(var, self.config.variance_floor, out=var)
+        return self._var.copy()
+
+    def _update_variance(self):
+        """V_i = mean(x_i^2) - mean(x_i)^2 from the running sums, floored; run whenever
+        the sums change, so act reads it as it is."""
+        var = self._var
+        np.divide(self._stats, float(max(self._size, 1)), out=self._mean)
+        np.multiply(self._mean1, self._mean1, out=var)
+        np.subtract(self._mean2, var, out=var)
+        np.maximum(var, self._floor, out=var)
 
     def recall_table(self):
         """(element slots, weights W) of the recall table."""
@@ -127,9 +149,8 @@ class Agent:
     def _set_input(self, x):
         """Keeps [x, x^2] in self._c: the input's terms of eq 4's expansion, and what
         learn stores."""
-        n = self.obs_dim
-        self._c[:n] = x
-        np.multiply(x, x, out=self._c[n:2 * n])
+        self._x_now[:] = x
+        np.multiply(x, x, out=self._xx_now)
 
     def _distances(self):
         """1 - S(M_j, x) (eq 2-4) of the input x (set by _set_input) for every stored
@@ -138,13 +159,17 @@ class Agent:
         sum_i (x_i - m_i)^2 / V_i = sum m^2/V - 2 sum x m / V + sum x^2/V per group: the
         memory holds [m; m^2; 1] one feature per row, so one product gives every radicand.
         """
-        n, v = self.obs_dim, self._v
-        np.divide(self._c.reshape(3, n), self.variance, out=v.reshape(3, n), casting="unsafe")
-        w = (v @ self._to_w).reshape(-1, 2 * n + 1)
-        d2 = w @ self._aug[:, : self._size]
+        np.divide(self._c3, self._var, out=self._v3, casting="unsafe")
+        np.matmul(self._v, self._to_w, out=self._w_flat)
+        if self._size == self.config.memory_size:
+            d2 = np.matmul(self._w, self._aug, out=self._d2)
+        else:
+            d2 = self._w @ self._aug[:, : self._size]
         np.maximum(d2, 0.0, out=d2)
         np.sqrt(d2, out=d2)
-        return d2[0] if len(d2) == 1 else self._group_w @ d2
+        if len(d2) == 1:
+            return d2[0]
+        return np.matmul(self._group_w, d2, out=self._d[: d2.shape[1]])
 
     def _similarities(self, x):
         """eq 2-4 for x against every stored element."""
@@ -160,7 +185,10 @@ class Agent:
         cost, never the result."""
         k = self.config.recall_size
         near = (d <= self._radius).nonzero()[0]
-        if not k <= len(near) <= 16 * k:
+        if len(near) < k:  # the input moved away: widen once before a full selection
+            self._radius *= 1.5
+            near = (d <= self._radius).nonzero()[0]
+        if not k <= len(near) <= 32 * k:
             m = min(4 * k, len(d) - 1)
             self._radius = float(d[np.argpartition(d, m)[m]])
             near = (d <= self._radius).nonzero()[0]  # all within it, ties included
@@ -173,11 +201,13 @@ class Agent:
 
     def act(self, obs, readings=None):
         """The action for observation obs (1-D). The fallback gets readings, or obs."""
-        x = np.array(obs, dtype=np.float64)
+        x = np.asarray(obs, dtype=np.float64)
         if x.shape != (self.obs_dim,):
             raise ValueError(f"observation must have shape ({self.obs_dim},), got {x.shape}")
-        if not np.isfinite(x).all():
-            raise ValueError("observation contains NaN or inf")
+        if not math.isfinite(x.dot(x)):  # one product; the exact test only when it fails
+            if not np.isfinite(x).all():
+                raise ValueError("observation contains NaN or inf")
+            raise ValueError("observation too large: |x|^2 overflows")
         c = self.config
         self._set_input(x)
         if self._size:
@@ -221,7 +251,7 @@ class Agent:
         if self._act is None:
             raise ValueError("learn() needs an act() first")
         reward = float(reward)
-        if reward != reward or abs(reward) == float("inf"):
+        if not math.isfinite(reward):
             raise ValueError("reward must be finite")
         c = self.config
         if self._size == c.memory_size:
@@ -230,10 +260,11 @@ class Agent:
         else:
             slot = self._size
             self._size += 1
-        xs = self._c[: 2 * self.obs_dim]  # [x, x^2] of the last act's input
+        xs = self._xs_now  # [x, x^2] of the last act's input
         self._xs[slot] = xs
-        self._aug[: 2 * self.obs_dim, slot] = xs
+        self._aug_x[:, slot] = xs
         self._stats += xs
+        self._update_variance()
         self._action[slot] = self._act
         self._utility[slot] = c.initial_utility
         self._rel[slot] = c.initial_reliability / self._rel_scale
@@ -266,27 +297,31 @@ class Agent:
     def _utility_update(self, element, reward):
         """eq 6: U_j += r * gamma^(t - t_j) along the backward links from the newest
         element, stopping where gamma^(t - t_j) < utility_cutoff."""
-        c, t, j = self.config, self._time[element], element
+        c, time, prev = self.config, self._time, self._prev
+        t, j, chain, gains = time[element], element, [], []
         while j >= 0:
-            g = c.discount ** int(t - self._time[j])
+            g = c.discount ** (t - time[j])
             if g < c.utility_cutoff:
                 break
-            self._utility[j] += reward * g
-            j = int(self._prev[j])
+            chain.append(j)
+            gains.append(g)
+            j = prev[j]
+        self._utility[chain] += reward * np.array(gains)
 
     def _reliability_update(self, element, reward):
         """eq 7 along the backward links from the element used for the last decision:
         R += rho r (1 - R) when r > 0, R += rho r R when r < 0."""
-        rho, scale, j = self.config.reliability_rate, self._rel_scale, element
+        prev, chain, j = self._prev, [], element
         while j >= 0:
-            r = self._rel[j] * scale
-            r += rho * reward * ((1.0 - r) if reward > 0 else r)
-            self._rel[j] = r / scale
-            j = int(self._prev[j])
+            chain.append(j)
+            j = prev[j]
+        r = self._rel[chain] * self._rel_scale
+        r += self.config.reliability_rate * reward * ((1.0 - r) if reward > 0 else r)
+        self._rel[chain] = r / self._rel_scale
 
     def _forget(self, k):
         """Removes element k, splicing its episode's links around it."""
-        p, n = int(self._prev[k]), int(self._next[k])
+        p, n = self._prev[k], int(self._next[k])
         if p >= 0:
             self._next[p] = n
         if n >= 0:
@@ -299,4 +334,5 @@ class Agent:
             keep = self._table != k
             self._table, self._dist = self._table[keep], self._dist[keep]
         self._stats -= self._xs[k]
-        self._prev[k] = self._next[k] = -1
+        self._prev[k] = -1
+        self._next[k] = -1

@@ -1,11 +1,12 @@
 """`ebrl bench`: microseconds per agent step, by part, for both robots.
 
 Each robot runs the protocol's loop (avoidance condition) until the agent's memory
-is full, then times N more steps: env.step, the agent's act and learn, and the
-whole loop. Beside them, the references the issues set: raw `mujoco.mj_step` over
+is full, then times blocks of N more steps: env.step, the agent's act and learn
+(with the observation's conversion), and the whole loop; medians over the blocks. Beside them, the references the issues set: raw `mujoco.mj_step` over
 the same substeps, and a plain float32 numpy pass over a full memory (one
 matrix-vector product and the top-N_r selection).
 """
+import statistics
 import time
 
 import mujoco
@@ -14,7 +15,9 @@ from ebrl.benchmark import reference_pass
 from experiments import protocol
 
 
-def measure(robot, steps):
+def measure(robot, steps, blocks=5):
+    """Medians over `blocks` blocks of `steps` timed steps each (this machine's timings
+    vary by about 10% from one moment to the next; the median of blocks much less)."""
     import tasks
     spec = protocol.RunSpec(robot, "avoidance", 0, steps)
     env = tasks.load(robot, seed=0)
@@ -22,45 +25,49 @@ def measure(robot, steps):
     config = spec.agent_config()
     ts = env.reset()
     clock = time.perf_counter
-    t_env = t_agent = 0.0
-    warm = config.memory_size + 200
-    for step in range(warm + steps):
-        if step == warm:
-            t_env = t_agent = 0.0
-            substeps0 = env.physics.substeps
-            started = clock()
-        t0 = clock()
-        obs, readings = protocol.agent_input(ts.observation)
-        action = agent.act(obs, readings=readings)
-        t1 = clock()
-        ts = env.step(action)
-        t2 = clock()
+    for _ in range(config.memory_size + 200):  # fill the memory first
+        ts = env.step(agent.act(*protocol.agent_input(ts.observation)))
         agent.learn(ts.reward, ts.last())
-        t3 = clock()
         if ts.last():
             ts = env.reset()
-        t_env += t2 - t1
-        t_agent += (t1 - t0) + (t3 - t2)
-    whole = clock() - started
-    substeps = (env.physics.substeps - substeps0) / steps
-    # Raw physics over the same number of substeps, on the same model and state.
+    rows, substeps0 = [], env.physics.substeps
     m, d = env.physics.model.ptr, env.physics.data.ptr
-    t0 = clock()
-    for _ in range(steps):
-        mujoco.mj_step(m, d, max(1, int(round(substeps))))
-    raw = (clock() - t0) / steps
+    for _ in range(blocks):
+        t_env = t_agent = 0.0
+        started = clock()
+        for _ in range(steps):
+            t0 = clock()
+            action = agent.act(*protocol.agent_input(ts.observation))
+            t1 = clock()
+            ts = env.step(action)
+            t2 = clock()
+            agent.learn(ts.reward, ts.last())
+            t3 = clock()
+            if ts.last():
+                ts = env.reset()
+            t_env += t2 - t1
+            t_agent += (t1 - t0) + (t3 - t2)
+        whole = clock() - started
+        substeps = (env.physics.substeps - substeps0) / (steps * (len(rows) + 1))
+        # Raw physics over the same number of substeps, on the same model and state.
+        n = max(1, int(round(substeps)))
+        t0 = clock()
+        for _ in range(steps):
+            mujoco.mj_step(m, d, n)
+        raw = clock() - t0
+        rows.append((raw, t_env, t_agent, whole))
     env.close()
+    raw, t_env, t_agent, whole = (statistics.median(col) * 1e6 / steps for col in zip(*rows))
     obs_dim = len(protocol.agent_input(ts.observation)[0])
-    ref = reference_pass(config.memory_size, obs_dim, config.recall_size)
-    us = 1e6 / steps
+    ref = reference_pass(config.memory_size, obs_dim, config.recall_size, blocks=blocks)
     return {"robot": robot, "memory": config.memory_size, "substeps": substeps,
-            "raw_physics": raw * 1e6, "env_step": t_env * us, "agent": t_agent * us,
-            "whole_loop": whole * us, "reference_pass": ref}
+            "raw_physics": raw, "env_step": t_env, "agent": t_agent,
+            "whole_loop": whole, "reference_pass": ref}
 
 
-def main(steps=3000):
-    rows = [measure(robot, steps) for robot in ("two_wheel", "floating")]
-    print(f"microseconds per agent step ({steps} timed steps after the memory is full)")
+def main(steps=2000, blocks=5):
+    rows = [measure(robot, steps, blocks) for robot in ("two_wheel", "floating")]
+    print(f"microseconds per agent step, memory full: medians of {blocks} blocks of {steps} steps")
     head = ("robot", "memory", "substeps", "raw mj_step", "env.step", "env/raw",
             "ref pass", "agent", "agent/ref", "whole loop", "loop/(raw+ref)")
     print(("{:>10} " * len(head)).format(*head))

@@ -112,7 +112,8 @@ def build_parser():
     v.add_argument("--out", type=pathlib.Path, required=True)
 
     b = sub.add_parser("bench", help="microseconds per agent step, by part")
-    b.add_argument("--steps", type=positive_int, default=3000)
+    b.add_argument("--steps", type=positive_int, default=2000, help="timed steps per block")
+    b.add_argument("--blocks", type=positive_int, default=5, help="medians over this many blocks")
 
     w = sub.add_parser("sweep", help="the protocol at several values of one agent parameter")
     w.add_argument("--param", default="policy_threshold")
@@ -188,7 +189,7 @@ def cmd_render(args):
 
 def cmd_bench(args):
     from experiments import bench
-    bench.main(args.steps)
+    bench.main(args.steps, args.blocks)
     return 0
 
 

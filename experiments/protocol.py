@@ -107,9 +107,14 @@ def _reading_scale():
 def agent_input(observation):
     """(agent observation, readings for the fallback): readings scaled to [0, 1],
     then the velocity in units/step for the floating robot."""
-    readings = observation["range"] * _reading_scale()
-    velocity = observation.get("velocity")
-    return (readings if velocity is None else np.concatenate([readings, velocity])), readings
+    codes, velocity = observation["range"], observation.get("velocity")
+    if velocity is None:
+        readings = codes * _reading_scale()
+        return readings, readings
+    obs = np.empty(len(codes) + len(velocity))
+    readings = np.multiply(codes, _reading_scale(), out=obs[: len(codes)])
+    obs[len(codes):] = velocity
+    return obs, readings
 
 
 def execute(spec, on_step=None):

@@ -20,12 +20,12 @@ class Physics(navigation.Physics):
         super()._reload_from_data(data)
         self._thrust_x = self.model.name2id("robot/thrust_x", "actuator")
         self._thrust_y = self.model.name2id("robot/thrust_y", "actuator")
-        self._mass = self.model.body_subtreemass[self.model.name2id("robot/base", "body")]
+        self._mass = float(self.model.body_subtreemass[self.model.name2id("robot/base", "body")])
 
     def thrust(self, dvx, dvy):
         """Sets the thrust that changes the velocity by (dvx, dvy) units/step in one substep."""
-        scale = UNIT / self.step_seconds * self._mass / self.model.opt.timestep
-        ctrl = self.data.ctrl
+        scale = UNIT / self.step_seconds * self._mass / self.timestep
+        ctrl = self._ctrl
         ctrl[self._thrust_x] = dvx * scale
         ctrl[self._thrust_y] = dvy * scale
 
@@ -34,7 +34,7 @@ class Floating(navigation.Navigation):
     action_dim = 2
 
     def initialize_episode(self, physics):
-        physics.step_seconds = SUBSTEPS * physics.model.opt.timestep
+        physics.step_seconds = SUBSTEPS * physics.timestep
         super().initialize_episode(physics)
 
     def get_observation(self, physics):

@@ -52,17 +52,22 @@ class Physics(dm_mujoco.Physics):
         m = self.model
         jx, jy = m.name2id("robot/x", "joint"), m.name2id("robot/y", "joint")
         yaw = mujoco.mj_name2id(m.ptr, mujoco.mjtObj.mjOBJ_JOINT, "robot/yaw")
-        self._qx, self._qy = m.jnt_qposadr[jx], m.jnt_qposadr[jy]
-        self._dx, self._dy = m.jnt_dofadr[jx], m.jnt_dofadr[jy]
-        self._qyaw = m.jnt_qposadr[yaw] if yaw >= 0 else None
+        self._qx, self._qy = int(m.jnt_qposadr[jx]), int(m.jnt_qposadr[jy])
+        self._dx, self._dy = int(m.jnt_dofadr[jx]), int(m.jnt_dofadr[jy])
+        self._qyaw = int(m.jnt_qposadr[yaw]) if yaw >= 0 else None
         self.robot_radius = m.geom_size[m.name2id("robot/hull", "geom"), 0] / UNIT
         beams = np.flatnonzero(m.sensor_type == mujoco.mjtSensor.mjSENS_RANGEFINDER)
         adr = m.sensor_adr[beams]
         if not np.array_equal(adr, np.arange(adr[0], adr[0] + len(adr))):
             raise ValueError("rangefinders must be declared one after another")
         self._beams = slice(int(adr[0]), int(adr[0]) + len(adr))
+        # MuJoCo's own arrays, read and written every step without dm_control's wrappers.
         self._mj = (m.ptr, data.ptr)
-        self._mj_warning = data.ptr.warning
+        self._qpos, self._qvel = data.ptr.qpos, data.ptr.qvel
+        self._ctrl, self._sensordata = data.ptr.ctrl, data.ptr.sensordata
+        self._bad_qacc = data.ptr.warning[mujoco.mjtWarning.mjWARN_BADQACC]
+        #: The room's timestep in seconds.
+        self.timestep = float(m.opt.timestep)
         #: Substeps run so far, for benchmarks against raw mujoco.mj_step.
         self.substeps = 0
         goal = m.name2id("goal", "site")
@@ -74,19 +79,19 @@ class Physics(dm_mujoco.Physics):
     # -- read-outs ---------------------------------------------------------
     def robot_pose(self):
         """(x, y, heading) in paper units and radians; heading 0 for a robot without yaw."""
-        q = self.data.qpos
+        q = self._qpos
         heading = float(q[self._qyaw]) if self._qyaw is not None else 0.0
         return float(q[self._qx]) / UNIT, float(q[self._qy]) / UNIT, heading
 
     def robot_velocity(self):
         """(vx, vy) in paper units per agent step."""
-        v = self.data.qvel
+        v = self._qvel
         scale = self.step_seconds / UNIT
         return np.array([v[self._dx] * scale, v[self._dy] * scale])
 
     def ranges(self):
         """Distance from the body surface along each beam, in units; inf where nothing is hit."""
-        raw = self.data.sensordata[self._beams]
+        raw = self._sensordata[self._beams]
         distance = raw * (1.0 / UNIT)
         distance -= self.robot_radius
         distance[raw < 0.0] = np.inf
@@ -103,13 +108,13 @@ class Physics(dm_mujoco.Physics):
         contacts describe the new state, without its per-call Python overhead.
         Raises PhysicsError when MuJoCo flags an unstable state."""
         model, data = self._mj
-        before = self._mj_warning[mujoco.mjtWarning.mjWARN_BADQACC].number
+        before = self._bad_qacc.number
         mujoco.mj_step2(model, data)
         if nstep > 1:
             mujoco.mj_step(model, data, nstep - 1)
         mujoco.mj_step1(model, data)
         self.substeps += nstep
-        if self._mj_warning[mujoco.mjtWarning.mjWARN_BADQACC].number != before:
+        if self._bad_qacc.number != before:
             raise control.PhysicsError(f"unstable simulation at t={data.time:.3f} s")
 
     # -- setters -----------------------------------------------------------
@@ -180,7 +185,7 @@ class Navigation(base.Task):
         a = np.asarray(action, dtype=np.float64)
         if a.shape != (self.action_dim,) and not (a.ndim == 0 and self.action_dim == 1):
             raise ValueError(f"action must have shape ({self.action_dim},), got {a.shape}")
-        values = a.reshape(-1).tolist()
+        values = a.tolist() if a.ndim else [a.item()]
         if not all(map(math.isfinite, values)):
             raise ValueError(f"action must be finite, got {values}")
         return [min(max(v, -1.0), 1.0) for v in values]
@@ -189,4 +194,8 @@ class Navigation(base.Task):
         """Section 3.3: one factor per action part, drawn uniformly from [1 - noise, 1]."""
         if self.action_noise <= 0:
             return [1.0, 1.0]
-        return self.random.uniform(1.0 - self.action_noise, 1.0, size=2).tolist()
+        # RandomState.uniform(low, 1) computes low + (1 - low) u; written out, it skips
+        # uniform's argument handling and gives the same numbers.
+        low = 1.0 - self.action_noise
+        u, v = self.random.random_sample(2).tolist()
+        return [low + (1.0 - low) * u, low + (1.0 - low) * v]

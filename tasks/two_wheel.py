@@ -41,15 +41,16 @@ class Physics(navigation.Physics):
 
     def drive(self, speed, yaw_rate):
         """Servo targets: speed in units/s along the heading, yaw rate in rad/s."""
-        self.data.ctrl[self._forward] = speed * UNIT
-        self.data.ctrl[self._turn] = yaw_rate
+        ctrl = self._ctrl
+        ctrl[self._forward] = speed * UNIT
+        ctrl[self._turn] = yaw_rate
 
 
 class TwoWheel(navigation.Navigation):
     action_dim = 1
 
     def initialize_episode(self, physics):
-        physics.step_seconds = (TURN_SUBSTEPS + MOVE_SUBSTEPS) * physics.model.opt.timestep
+        physics.step_seconds = (TURN_SUBSTEPS + MOVE_SUBSTEPS) * physics.timestep
         super().initialize_episode(physics)
 
     def before_step(self, action, physics):
@@ -58,7 +59,7 @@ class TwoWheel(navigation.Navigation):
         turn = -a * MAX_TURN * noise_turn  # counter-clockwise positive
         self._move = MAX_MOVE * (1.0 - abs(a)) * noise_move
         self._turn_sign = 1.0 if turn > 0 else -1.0
-        dt = physics.model.opt.timestep
+        dt = physics.timestep
         physics.drive(0.0, turn / (TURN_SUBSTEPS * dt))
         physics.step(TURN_SUBSTEPS)
         x, y, heading = physics.robot_pose()
@@ -71,7 +72,7 @@ class TwoWheel(navigation.Navigation):
         x0, y0, c, s = self._from
         rest = self._move - ((x - x0) * c + (y - y0) * s)
         if rest > BLOCKED_TOLERANCE:
-            dt = physics.model.opt.timestep
+            dt = physics.timestep
             leftover = self._turn_sign * rest * MAX_TURN / MAX_MOVE
             physics.drive(0.0, leftover / (TURN_SUBSTEPS * dt))
             physics.step(TURN_SUBSTEPS)
