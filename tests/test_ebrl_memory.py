@@ -86,3 +86,17 @@ def test_recall_selection_is_the_stable_top_n_r_whatever_the_radius():
         want = np.argsort(d, kind="stable")[:7]
         got = ag._nearest(d)
         np.testing.assert_array_equal(got, want)
+
+
+@pytest.mark.parametrize("memory_size,obs_dim,groups", [(7, 3, None), (33, 5, [[0, 1, 2], [3, 4]]),
+                                                         (4096, 10, [range(8), range(8, 10)])])
+def test_memory_arrays_are_disjoint_aligned_and_initialised(memory_size, obs_dim, groups):
+    cfg = ebrl.Config(memory_size=memory_size, recall_size=7)
+    ag = ebrl.Agent(cfg, obs_dim, 2, intrinsic.RandomWalk(2), seed=0,
+                    groups=groups, group_weights=None if groups is None else [0.7, 0.3])
+    arrays = [ag._aug, ag._xs, ag._action, ag._utility, ag._rel, ag._next, ag._d2, ag._d]
+    for i, a in enumerate(arrays):
+        assert a.ctypes.data % 64 == 0
+        assert not any(np.shares_memory(a, b) for b in arrays[i + 1:])
+    assert (ag._aug == 1).all() and (ag._next == -1).all() and not ag._xs.any()
+    assert ag._aug.shape == (2 * obs_dim + 1, memory_size) and ag._d2.shape[1] == memory_size
