@@ -46,12 +46,17 @@ def test_same_seed_same_actions():
     assert np.array_equal(a, b) and not np.array_equal(a, c)
 
 
+@pytest.mark.filterwarnings("ignore:overflow encountered")  # |x|^2 of the too-large input
 def test_bad_observations_raise():
     ag = ebrl.Agent(ebrl.paper_config("two_wheel"), 7, 1, intrinsic.RandomWalk(1), seed=0)
     with pytest.raises(ValueError, match="shape"):
         ag.act(np.zeros(6))
     with pytest.raises(ValueError, match="NaN"):
         ag.act(np.array([0, 0, np.nan, 0, 0, 0, 0]))
+    with pytest.raises(ValueError, match="NaN"):
+        ag.act(np.array([0, 0, 0, -np.inf, 0, 0, 0]))
+    with pytest.raises(ValueError, match="too large"):
+        ag.act(np.full(7, 1e200))
     with pytest.raises(ValueError, match="act"):
         ag.learn(0.0)
 
