@@ -36,14 +36,14 @@ class _Arena:
     plain memory. Values and results are the same either way."""
 
     def __init__(self, specs):
-        sizes = [-(-int(np.prod(shape)) * np.dtype(dtype).itemsize // 64) * 64
-                 for shape, dtype in specs]
+        counts = [int(np.prod(shape)) for shape, _ in specs]
+        sizes = [-(-count * np.dtype(dtype).itemsize // 64) * 64  # 64-byte aligned
+                 for count, (_, dtype) in zip(counts, specs)]
         block = np.zeros(max(sum(sizes) + _PAGE, 2 * _PAGE + 64), dtype=np.uint8)
         at = (-block.ctypes.data) % _PAGE
         self.arrays = []
-        for (shape, dtype), size in zip(specs, sizes):
-            self.arrays.append(block[at: at + size].view(dtype)[: int(np.prod(shape))]
-                               .reshape(shape))
+        for (shape, dtype), count, size in zip(specs, counts, sizes):
+            self.arrays.append(block[at: at + size].view(dtype)[:count].reshape(shape))
             at += size
 
 
@@ -87,10 +87,11 @@ class Agent:
                             ((M, self.action_dim), np.float64), (M, np.float64),
                             (M, np.float64), (M, np.int64),
                             ((len(groups), M), np.float32), (M, np.float32)]).arrays
-        self._aug[:] = 1.0  # [m; m^2; 1], see _distances
+        # _aug: [m; m^2; 1] one feature per row (see _distances); _xs: [x, x^2] per element,
+        # for the running sums; _rel * _rel_scale: the true reliability.
+        self._aug[:] = 1.0
         self._next[:] = -1
-        self._x = self._xs[:, :n]  # [x, x^2] per element, for the running sums
-        # true reliability = self._rel * self._rel_scale
+        self._x = self._xs[:, :n]
         self._rel_scale = 1.0
         self._time = [0] * M
         self._prev = [-1] * M

@@ -3,10 +3,17 @@
 Inputs are the encoded 0..255 readings scaled to [0, 1]. A fallback behaviour is a
 callable fallback(readings, rng) -> action array.
 """
+import functools
+
 import numpy as np
 
 THETA = 0.25  # eq 9's sensitivity threshold for the floating robot
-_RANKS = np.arange(1, 33)  # eq 8's i, for up to 64 sensors
+
+
+@functools.cache
+def _ranks(half):
+    """eq 8's i = 1..half, made once per sensor count."""
+    return np.arange(1, half + 1)
 
 
 def avoid_two_wheel(readings):
@@ -16,8 +23,7 @@ def avoid_two_wheel(readings):
     """
     s = np.asarray(readings, dtype=np.float64)
     half = len(s) // 2
-    i = _RANKS[:half] if half <= len(_RANKS) else np.arange(1, half + 1)
-    return float(np.dot(i, s[:half] - s[: -half - 1: -1]) / (half * (half + 1) // 2))
+    return float(np.dot(_ranks(half), s[:half] - s[: -half - 1: -1]) / (half * (half + 1) // 2))
 
 
 def _eq9(b, theta):

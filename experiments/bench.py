@@ -2,9 +2,10 @@
 
 Each robot runs the protocol's loop (avoidance condition) until the agent's memory
 is full, then times blocks of N more steps: env.step, the agent's act and learn
-(with the observation's conversion), and the whole loop; medians over the blocks. Beside them, the references the issues set: raw `mujoco.mj_step` over
-the same substeps, and a plain float32 numpy pass over a full memory (one
-matrix-vector product and the top-N_r selection).
+(with the observation's conversion), and the whole loop; medians over the blocks.
+Beside them, the references the issues set: raw `mujoco.mj_step` over the same
+substeps, and a plain float32 numpy pass over a full memory (one matrix-vector
+product and the top-N_r selection).
 """
 import statistics
 import time
@@ -23,44 +24,42 @@ def measure(robot, steps, blocks=5):
     env = tasks.load(robot, seed=0)
     agent = protocol.make_agent(spec, env)
     config = spec.agent_config()
-    ts = env.reset()
     clock = time.perf_counter
-    for _ in range(config.memory_size + 200):  # fill the memory first
-        ts = env.step(agent.act(*protocol.agent_input(ts.observation)))
+    ts = env.reset()
+
+    def step():
+        """One protocol step; returns (seconds in env.step, seconds in the agent)."""
+        nonlocal ts
+        t0 = clock()
+        action = agent.act(*protocol.agent_input(ts.observation))
+        t1 = clock()
+        ts = env.step(action)
+        t2 = clock()
         agent.learn(ts.reward, ts.last())
+        t3 = clock()
         if ts.last():
             ts = env.reset()
-    rows, substeps0 = [], env.physics.substeps
+        return t2 - t1, (t1 - t0) + (t3 - t2)
+
+    for _ in range(config.memory_size + 200):  # fill the memory first
+        step()
     m, d = env.physics.model.ptr, env.physics.data.ptr
+    rows, substeps = [], []
     for _ in range(blocks):
-        t_env = t_agent = 0.0
-        started = clock()
-        for _ in range(steps):
-            t0 = clock()
-            action = agent.act(*protocol.agent_input(ts.observation))
-            t1 = clock()
-            ts = env.step(action)
-            t2 = clock()
-            agent.learn(ts.reward, ts.last())
-            t3 = clock()
-            if ts.last():
-                ts = env.reset()
-            t_env += t2 - t1
-            t_agent += (t1 - t0) + (t3 - t2)
+        substeps0, started = env.physics.substeps, clock()
+        t_env, t_agent = map(sum, zip(*(step() for _ in range(steps))))
         whole = clock() - started
-        substeps = (env.physics.substeps - substeps0) / (steps * (len(rows) + 1))
+        substeps.append((env.physics.substeps - substeps0) / steps)
         # Raw physics over the same number of substeps, on the same model and state.
-        n = max(1, int(round(substeps)))
+        n = max(1, round(substeps[-1]))
         t0 = clock()
         for _ in range(steps):
             mujoco.mj_step(m, d, n)
-        raw = clock() - t0
-        rows.append((raw, t_env, t_agent, whole))
+        rows.append((clock() - t0, t_env, t_agent, whole))
     env.close()
     raw, t_env, t_agent, whole = (statistics.median(col) * 1e6 / steps for col in zip(*rows))
-    obs_dim = len(protocol.agent_input(ts.observation)[0])
-    ref = reference_pass(config.memory_size, obs_dim, config.recall_size, blocks=blocks)
-    return {"robot": robot, "memory": config.memory_size, "substeps": substeps,
+    ref = reference_pass(config.memory_size, agent.obs_dim, config.recall_size, blocks=blocks)
+    return {"robot": robot, "memory": config.memory_size, "substeps": statistics.mean(substeps),
             "raw_physics": raw, "env_step": t_env, "agent": t_agent,
             "whole_loop": whole, "reference_pass": ref}
 

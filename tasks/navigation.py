@@ -120,12 +120,12 @@ class Physics(dm_mujoco.Physics):
     # -- setters -----------------------------------------------------------
     def set_robot_pose(self, x, y, heading=0.0):
         """Places the robot at (x, y, heading), in units and radians, at rest."""
-        q = self.data.qpos
+        q = self._qpos
         q[self._qx], q[self._qy] = x * UNIT, y * UNIT
         if self._qyaw is not None:
             q[self._qyaw] = heading
-        self.data.qvel[:] = 0.0
-        self.data.ctrl[:] = 0.0
+        self._qvel[:] = 0.0
+        self._ctrl[:] = 0.0
         self.forward()
 
 
