@@ -3,8 +3,8 @@
 Worked example::
 
     import numpy as np, ebrl
-    agent = ebrl.Agent(ebrl.paper_config("two_wheel"), obs_dim=7, action_dim=1,
-                       fallback=ebrl.intrinsic.fallback_for("two_wheel", "avoidance"), seed=0)
+    agent = ebrl.Agent(ebrl.paper_config("T"), obs_dim=7, action_dim=1,
+                       fallback=ebrl.intrinsic.fallback_for("eq8", "avoidance"), seed=0)
     obs = np.zeros(7)                      # readings scaled to [0, 1]
     for t in range(100):
         action = agent.act(obs)            # memory (eq 5) or the fallback behaviour

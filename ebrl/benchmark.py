@@ -30,7 +30,7 @@ def reference_pass(memory_size=4096, dim=10, recall_size=7, repeats=1000, blocks
 def bench_agent(memory_size=4096, steps=100_000, window=5_000, seed=0):
     """Floating-like agent (10 inputs, eq 3 groups 8 + 2): us/step in windows."""
     rng = np.random.default_rng(seed)
-    agent = Agent(paper_config("floating", memory_size=memory_size), 10, 2,
+    agent = Agent(paper_config("F", memory_size=memory_size), 10, 2,
                   lambda readings, r: r.normal(0.0, 0.5, 2).clip(-1, 1),
                   groups=[np.arange(8), np.arange(8, 10)], group_weights=[0.7, 0.3], seed=seed)
     obs = rng.random((window, 10))

@@ -1,7 +1,8 @@
-"""Every agent parameter, with Table 1's values as defaults (two_wheel's memory)."""
+"""Every agent parameter, with Table 1's values as defaults (column T's memory)."""
 import dataclasses
 
-ROBOT_MEMORY = {"two_wheel": 1024, "floating": 4096}  # Table 1: (T) 1024, (F) 4096
+#: Table 1's memory size by column: (T) two wheels robot, (F) floating robot.
+TABLE1_MEMORY = {"T": 1024, "F": 4096}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -51,8 +52,9 @@ class Config:
                 raise ValueError(f"{name} must be a finite number, got {v!r}")
 
 
-def paper_config(robot, **overrides):
-    """Table 1's parameters for robot ("two_wheel" or "floating"), with overrides."""
-    if robot not in ROBOT_MEMORY:
-        raise ValueError(f"unknown robot {robot!r}; valid: {', '.join(ROBOT_MEMORY)}")
-    return Config(**{"memory_size": ROBOT_MEMORY[robot], **overrides})
+def paper_config(column, **overrides):
+    """Table 1's parameters in column "T" or "F" (they differ in memory size), with
+    overrides."""
+    if column not in TABLE1_MEMORY:
+        raise ValueError(f"unknown Table 1 column {column!r}; valid: {', '.join(TABLE1_MEMORY)}")
+    return Config(**{"memory_size": TABLE1_MEMORY[column], **overrides})

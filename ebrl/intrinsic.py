@@ -16,7 +16,7 @@ def _ranks(half):
     return np.arange(1, half + 1)
 
 
-def avoid_two_wheel(readings):
+def avoid_by_turning(readings):
     """eq 8: a = sum_{i=1}^{n//2} i (s_i - s_{n+1-i}) / sum_{i=1}^{n//2} i.
 
     readings leftmost first; a > 0 turns right, away from something on the left.
@@ -35,7 +35,7 @@ def _eq9(b, theta):
     return 0.0
 
 
-def avoid_floating(readings, theta=THETA):
+def avoid_by_accelerating(readings, theta=THETA):
     """eq 9-10 for both axes. readings: E, NE, N, NW, W, SW, S, SE (counter-clockwise).
 
     eq 10: b_h = 0.5 (s_W - s_E) + 0.25 (s_NW + s_SW - s_NE - s_SE), and symmetrically
@@ -76,15 +76,21 @@ class Intrinsic:
         return np.array(self.avoid(readings), dtype=np.float64, ndmin=1)
 
 
-def fallback_for(robot, condition, random_rate=0.2, sd=0.5):
-    """The fallback behaviour of a robot ("two_wheel", "floating") under a condition
-    ("random": random walk only, "avoidance": the intrinsic behaviour)."""
-    avoid, dim = {"two_wheel": (avoid_two_wheel, 1), "floating": (avoid_floating, 2)}.get(
-        robot, (None, None))
-    if avoid is None:
-        raise ValueError(f"unknown robot {robot!r}; valid: two_wheel, floating")
+#: Section 3.4's intrinsic behaviours by equation: (behaviour, action dimension).
+BEHAVIOURS = {"eq8": (avoid_by_turning, 1), "eq9-10": (avoid_by_accelerating, 2)}
+CONDITIONS = ("random", "avoidance")
+
+
+def fallback_for(behaviour, condition, random_rate=0.2, sd=0.5):
+    """The fallback of Section 3.6's condition ("random": the random walk only,
+    "avoidance": the intrinsic behaviour `behaviour`, a key of BEHAVIOURS, with the
+    random action at random_rate), acting in the behaviour's action dimension."""
+    if behaviour not in BEHAVIOURS:
+        raise ValueError(f"unknown intrinsic behaviour {behaviour!r}; valid: "
+                         f"{', '.join(BEHAVIOURS)}")
+    avoid, dim = BEHAVIOURS[behaviour]
     if condition == "random":
         return RandomWalk(dim, sd)
     if condition == "avoidance":
         return Intrinsic(avoid, dim, random_rate, sd)
-    raise ValueError(f"unknown condition {condition!r}; valid: random, avoidance")
+    raise ValueError(f"unknown condition {condition!r}; valid: {', '.join(CONDITIONS)}")

@@ -4,8 +4,8 @@ Each robot runs the protocol's loop (avoidance condition) until the agent's memo
 is full, then times blocks of N more steps: env.step, the agent's act and learn
 (with the observation's conversion), and the whole loop; medians over the blocks.
 Beside them, the references the issues set: raw `mujoco.mj_step` over the same
-substeps, and a plain float32 numpy pass over a full memory (one matrix-vector
-product and the top-N_r selection).
+substeps with the sensors computed once (as the tasks do), and a plain float32 numpy
+pass over a full memory (one matrix-vector product and the top-N_r selection).
 """
 import statistics
 import time
@@ -21,9 +21,10 @@ def measure(robot, steps, blocks=5):
     vary by about 10% from one moment to the next; the median of blocks much less)."""
     import tasks
     spec = protocol.RunSpec(robot, "avoidance", 0, steps)
-    env = tasks.load(robot, seed=0)
+    env = tasks.load(spec.entry, seed=0)
     agent = protocol.make_agent(spec, env)
     config = spec.agent_config()
+    keys = tuple(key for key, _ in spec.entry.modalities)
     clock = time.perf_counter
     ts = env.reset()
 
@@ -31,7 +32,7 @@ def measure(robot, steps, blocks=5):
         """One protocol step; returns (seconds in env.step, seconds in the agent)."""
         nonlocal ts
         t0 = clock()
-        action = agent.act(*protocol.agent_input(ts.observation))
+        action = agent.act(*protocol.agent_input(ts.observation, keys))
         t1 = clock()
         ts = env.step(action)
         t2 = clock()
@@ -50,11 +51,16 @@ def measure(robot, steps, blocks=5):
         t_env, t_agent = map(sum, zip(*(step() for _ in range(steps))))
         whole = clock() - started
         substeps.append((env.physics.substeps - substeps0) / steps)
-        # Raw physics over the same number of substeps, on the same model and state.
+        # Raw physics over the same number of substeps, on the same model and state, with
+        # the sensors computed once per agent step (the model has them disabled).
         n = max(1, round(substeps[-1]))
+        bit = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
         t0 = clock()
         for _ in range(steps):
             mujoco.mj_step(m, d, n)
+            m.opt.disableflags &= ~bit
+            mujoco.mj_sensorPos(m, d)
+            m.opt.disableflags |= bit
         rows.append((clock() - t0, t_env, t_agent, whole))
     env.close()
     raw, t_env, t_agent, whole = (statistics.median(col) * 1e6 / steps for col in zip(*rows))
@@ -64,10 +70,11 @@ def measure(robot, steps, blocks=5):
             "whole_loop": whole, "reference_pass": ref}
 
 
-def main(steps=2000, blocks=5):
-    rows = [measure(robot, steps, blocks) for robot in ("two_wheel", "floating")]
+def main(steps=2000, blocks=5, robots=None):
+    from tasks.robots import ROBOTS
+    rows = [measure(robot, steps, blocks) for robot in (robots or tuple(ROBOTS))]
     print(f"microseconds per agent step, memory full: medians of {blocks} blocks of {steps} steps")
-    head = ("robot", "memory", "substeps", "raw mj_step", "env.step", "env/raw",
+    head = ("robot", "memory", "substeps", "raw physics", "env.step", "env/raw",
             "ref pass", "agent", "agent/ref", "whole loop", "loop/(raw+ref)")
     print(("{:>10} " * len(head)).format(*head))
     for r in rows:

@@ -61,6 +61,34 @@ def _choice(valid):
     return check
 
 
+def robot_list(text):
+    """--robot: a registered name, several joined by commas, "paper" (the paper's two
+    robots), "all" (every registered robot), or a path to a robot .xml file (with
+    --drive)."""
+    from tasks.robots import PAPER_ROBOTS, ROBOTS
+    if text == "paper":
+        return PAPER_ROBOTS
+    if text == "all":
+        return tuple(ROBOTS)
+    if text.lower().endswith(".xml"):
+        return (text,)
+    names = tuple(n.strip() for n in text.split(","))
+    for n in names:
+        if n not in ROBOTS:
+            raise argparse.ArgumentTypeError(
+                f"unknown robot {n!r}; valid: {', '.join(ROBOTS)}, paper, all, "
+                "or a path to a robot .xml file with --drive")
+    return names
+
+
+def _robot_args(parser, default):
+    from tasks.robots import DRIVES
+    parser.add_argument("--robot", type=robot_list, default=robot_list(default),
+                        help=f"default: {default} (see 'ebrl robots')")
+    parser.add_argument("--drive", type=_choice(tuple(DRIVES)), default=None,
+                        help="the drive of a robot given as a file: " + ", ".join(DRIVES))
+
+
 def _override(text):
     """name=value for an agent parameter (sweeps), e.g. policy_threshold=0.05."""
     import dataclasses
@@ -82,14 +110,15 @@ def build_parser():
     p = _Parser(prog="ebrl", description=__doc__)
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
+    sub.add_parser("robots", help="list the registered robots")
+
     r = sub.add_parser("run", help="run the protocol (skips runs already on disk)")
-    r.add_argument("--robot", type=_choice(paper.ROBOTS + ("all",)), default="all")
+    _robot_args(r, "paper")
     r.add_argument("--condition", type=_choice(paper.CONDITIONS + ("all",)), default="all")
     r.add_argument("--seeds", type=parse_seeds, default=list(range(paper.SEEDS)),
                    help="e.g. 0-49 (default), 3, or 1,4,9")
     r.add_argument("--steps", type=positive_int, default=None,
-                   help="agent steps per run (default: the paper's, "
-                        + ", ".join(f"{k} {v:,}" for k, v in paper.BUDGETS.items()) + ")")
+                   help="agent steps per run (default: the robot's budget, 'ebrl robots')")
     r.add_argument("--workers", type=positive_int, default=os.cpu_count() or 1)
     r.add_argument("--backend", type=_choice(("local", "ray")), default="local")
     r.add_argument("--out", type=pathlib.Path, default=pathlib.Path("results"))
@@ -105,13 +134,18 @@ def build_parser():
     rep.add_argument("--figures", type=pathlib.Path, default=pathlib.Path("docs/figures"))
 
     v = sub.add_parser("render", help="an offscreen MP4 of one run")
-    v.add_argument("--robot", type=_choice(paper.ROBOTS), required=True)
+    v.add_argument("--robot", required=True, help="a registered name or a robot .xml file")
+    v.add_argument("--drive", default=None, help="the drive of a robot given as a file")
+    v.add_argument("--camera", default="top",
+                   help="top (default), perspective, or a camera of the robot's file")
     v.add_argument("--condition", type=_choice(paper.CONDITIONS), required=True)
     v.add_argument("--seed", type=int, required=True)
     v.add_argument("--steps", type=positive_int, default=3000)
     v.add_argument("--out", type=pathlib.Path, required=True)
 
     b = sub.add_parser("bench", help="microseconds per agent step, by part")
+    b.add_argument("--robot", type=robot_list, default=robot_list("all"),
+                   help="default: every registered robot")
     b.add_argument("--steps", type=positive_int, default=2000, help="timed steps per block")
     b.add_argument("--blocks", type=positive_int, default=5, help="medians over this many blocks")
 
@@ -119,7 +153,7 @@ def build_parser():
     w.add_argument("--param", default="policy_threshold")
     w.add_argument("--values", default="0,0.01,0.05,0.1,0.2",
                    help="comma-separated values (default: %(default)s)")
-    w.add_argument("--robot", type=_choice(paper.ROBOTS + ("all",)), default="all")
+    _robot_args(w, "paper")
     w.add_argument("--condition", type=_choice(paper.CONDITIONS + ("all",)), default="all")
     w.add_argument("--seeds", type=parse_seeds, default=list(range(20)))
     w.add_argument("--steps", type=positive_int, default=None)
@@ -139,14 +173,33 @@ def build_parser():
 def _plan(args, overrides=()):
     """The specs that --robot, --condition, --seeds and --steps select."""
     from experiments import runner
-    robots = paper.ROBOTS if args.robot == "all" else (args.robot,)
     conditions = paper.CONDITIONS if args.condition == "all" else (args.condition,)
-    return runner.plan(robots, conditions, args.seeds, args.steps or paper.BUDGETS, overrides)
+    return runner.plan(args.robot, conditions, args.seeds, args.steps, overrides, args.drive)
+
+
+def _check_robots(args):
+    """Loads each robot's model once (a user's file can lack a part): ValueError if not."""
+    import tasks
+    for robot in args.robot:
+        tasks.load(robot, drive=args.drive).close()
+
+
+def cmd_robots(args):
+    from tasks.robots import ROBOTS
+    print(f"{'robot':<12} {'drive':<10} {'Table 1':<8} {'budget':>8}  {'avoidance':<9} description")
+    for r in ROBOTS.values():
+        print(f"{r.name:<12} {r.drive:<10} {r.table1:<8} {r.budget:>8,}  {r.avoidance:<9} "
+              f"{r.description}")
+    return 0
 
 
 def cmd_run(args):
     from experiments import report, results, runner
-    specs = _plan(args, args.set)
+    try:
+        _check_robots(args)
+        specs = _plan(args, args.set)
+    except ValueError as e:
+        return _fail(str(e))
     try:
         ran = runner.run(specs, args.out, workers=args.workers, backend=args.backend,
                          progress=not args.no_progress)
@@ -177,19 +230,22 @@ def cmd_render(args):
         return _fail(f"--out must end in .mp4, got {args.out}")
     if not args.out.parent.is_dir():
         return _fail(f"no folder {args.out.parent} for --out")
+    spec = protocol.RunSpec(args.robot, args.condition, args.seed, args.steps,
+                            drive=args.drive)
     try:
+        spec.entry
         rendering.ensure_backend()
-    except rendering.RenderingError as e:
+        rendering.check_camera(spec, args.camera)
+    except (ValueError, rendering.RenderingError) as e:
         return _fail(str(e))
-    spec = protocol.RunSpec(args.robot, args.condition, args.seed, args.steps)
-    result = rendering.record(spec, args.out)
+    result = rendering.record(spec, args.out, camera=args.camera)
     print(f"video: {args.out} ({len(result['trial_ends'])} goals in {args.steps} steps)")
     return 0
 
 
 def cmd_bench(args):
     from experiments import bench
-    bench.main(args.steps, args.blocks)
+    bench.main(args.steps, args.blocks, args.robot)
     return 0
 
 
@@ -202,6 +258,10 @@ def cmd_sweep(args):
         return _fail(str(e))
     if not values:
         return _fail("--values is empty")
+    try:
+        _check_robots(args)
+    except ValueError as e:
+        return _fail(str(e))
     plans = [(args.out / f"{args.param}_{v}", _plan(args, [(n, v)])) for n, v in values]
     try:
         baseline = None
@@ -229,17 +289,17 @@ def cmd_sweep(args):
     return 0
 
 
-DEMO_BUDGETS = {"two_wheel": 10_000, "floating": 20_000}
 DEMO_SEEDS = 6
 DEMO_VIDEO_STEPS = 3_000
 
 
 def cmd_demo(args):
-    """A quick protocol: 6 seeds at a third / a fifth of the paper's budgets, then the
-    report and one video."""
+    """A quick protocol: the paper's robots, 6 seeds at a fifth of their budgets (at least
+    10,000 steps), then the report and one video."""
     from experiments import protocol, rendering, report, results, runner
-    budgets = DEMO_BUDGETS
-    specs = runner.plan(paper.ROBOTS, paper.CONDITIONS, range(DEMO_SEEDS), budgets)
+    from tasks.robots import PAPER_ROBOTS, ROBOTS
+    budgets = {r: max(10_000, ROBOTS[r].budget // 5) for r in PAPER_ROBOTS}
+    specs = runner.plan(tuple(budgets), paper.CONDITIONS, range(DEMO_SEEDS), budgets)
     print(f"demo: {len(specs)} runs ({DEMO_SEEDS} seeds x 2 robots x 2 conditions), budgets "
           + ", ".join(f"{k} {v:,} steps" for k, v in budgets.items()) + f" -> {args.out}/")
     try:
@@ -248,8 +308,9 @@ def cmd_demo(args):
         rendering.ensure_backend()
     except (results.ResultsError, rendering.RenderingError) as e:
         return _fail(str(e))
-    video = args.out / "two_wheel_avoidance_seed000.mp4"
-    rendering.record(protocol.RunSpec("two_wheel", "avoidance", 0, DEMO_VIDEO_STEPS), video)
+    robot = PAPER_ROBOTS[0]
+    video = args.out / f"{robot}_avoidance_seed000.mp4"
+    rendering.record(protocol.RunSpec(robot, "avoidance", 0, DEMO_VIDEO_STEPS), video)
     print(f"report:  {path}\nfigures: {args.out / 'figures'}/\nvideo:   {video}")
     return 0
 
@@ -257,7 +318,7 @@ def cmd_demo(args):
 def main(argv=None):
     args = build_parser().parse_args(argv)
     try:
-        return {"run": cmd_run, "report": cmd_report, "render": cmd_render,
+        return {"robots": cmd_robots, "run": cmd_run, "report": cmd_report, "render": cmd_render,
                 "bench": cmd_bench, "sweep": cmd_sweep, "demo": cmd_demo}[args.command](args)
     except KeyboardInterrupt:
         print("ebrl: interrupted; finished runs are kept, rerun to resume", file=sys.stderr)

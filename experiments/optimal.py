@@ -160,19 +160,20 @@ def floating_lower_bound(length, max_acceleration=0.2):
     return int(math.ceil((-1 + math.sqrt(1 + 8 * length / a)) / 2 - 1e-9))
 
 
-def optimal(robot):
-    """{'length', 'steps', 'steps_lower', 'path'} for robot from the nominal start, in
-    paper units; steps is the feasible plan, steps_lower a bound no trial can beat."""
-    from experiments.report import room_rectangles
-    from tasks import navigation
-    field, obstacles, goal = room_rectangles()
+def optimal(robot, drive=None):
+    """{'length', 'steps', 'steps_lower', 'path'} for robot (a registered name, or a file
+    with its drive) from the room's nominal start, in paper units; steps is the feasible
+    plan, steps_lower a bound no trial can beat."""
+    import models
     import tasks
-    env = tasks.load(robot, seed=0)
+    entry = tasks.resolve(robot, drive)
+    env = tasks.load(entry, seed=0)
+    field, obstacles, goal, start = models.room_layout(env.physics.model)
     radius = env.physics.robot_radius
     env.close()
-    length, path = shortest_path(navigation.START[:2], field, obstacles, goal, radius)
-    if robot == "two_wheel":
-        steps = lower = two_wheel_steps(path, navigation.START[2])
+    length, path = shortest_path(start[:2], field, obstacles, goal, radius)
+    if entry.drive == "two_wheel":
+        steps = lower = two_wheel_steps(path, start[2])
     else:
         steps, lower = floating_steps(path), floating_lower_bound(length)
     return {"length": length, "steps": steps, "steps_lower": lower, "path": path}
@@ -184,7 +185,9 @@ def yardstick(runs, root=None):
     cache = {}
     for robot, condition in sorted({(r, c) for r, c, _ in runs}):
         if robot not in cache:
-            cache[robot] = optimal(robot)
+            p = next(run["parameters"] for (r, _, _), run in runs.items() if r == robot)
+            file = p.get("robot_file")
+            cache[robot] = optimal(file or robot, p["drive"] if file else None)
         best = cache[robot]
         ms = [run["metrics"] for (r, c, _), run in runs.items() if (r, c) == (robot, condition)]
         mins = [m["min_trial_steps"] for m in ms if m["min_trial_steps"] is not None]

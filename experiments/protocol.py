@@ -7,6 +7,7 @@ same function serves a local process pool and a Ray cluster; the driver writes i
 """
 import dataclasses
 import functools
+import pathlib
 import time
 
 import numpy as np
@@ -21,43 +22,63 @@ TRACE_SCALE = 100.0
 
 @dataclasses.dataclass(frozen=True)
 class RunSpec:
+    #: A name in the robot registry (tasks.ROBOTS), or a path to a robot file.
     robot: str
     condition: str
     seed: int
     steps: int
     #: Agent parameters that differ from Table 1 (for sweeps), as sorted pairs.
     overrides: tuple = ()
+    #: The drive of a robot file (None for a registered robot: the registry has it).
+    drive: str = None
+
+    @property
+    def entry(self):
+        """The robot's registry entry (tasks.robots.Robot)."""
+        from tasks.robots import resolve
+        return resolve(self.robot, self.drive)
+
+    @property
+    def label(self):
+        """The robot's name in folders and tables: its registered name, or its file's stem."""
+        return self.robot if self.drive is None else pathlib.Path(self.robot).stem
 
     @property
     def name(self):
-        return f"{self.robot}/{self.condition}/seed_{self.seed:03d}"
+        return f"{self.label}/{self.condition}/seed_{self.seed:03d}"
 
     def agent_config(self):
-        return ebrl.paper_config(self.robot, **dict(self.overrides))
+        return ebrl.paper_config(self.entry.table1, **dict(self.overrides))
 
     def parameters(self):
         """Everything that determines the run's result; a rerun matches on this."""
+        entry = self.entry
         return {
             "protocol_version": PROTOCOL_VERSION,
-            "robot": self.robot,
+            "robot": self.label,
+            "robot_file": None if self.drive is None else str(entry.model),
+            "drive": entry.drive,
             "condition": self.condition,
             "seed": self.seed,
             "steps": self.steps,
             "agent": dataclasses.asdict(self.agent_config()),
+            "avoidance": entry.avoidance,
+            "modalities": [list(m) for m in entry.modalities],
             "task": task_parameters(),
-            "model_sha256": model_digest(self.robot),
+            "model_sha256": model_digest(entry),
         }
 
 
 @functools.cache
-def model_digest(robot):
-    """A digest of the composed MJCF, so results made with another model never match.
-    Computed once per process (composing takes about 20 ms, and every spec asks)."""
+def model_digest(entry):
+    """A digest of the composed MJCF with the entry's options, so results made with
+    another model never match. Computed once per process (composing takes milliseconds,
+    and every spec asks)."""
     import hashlib
 
-    import models
-    xml, _ = models.compose(robot)
-    return hashlib.sha256(xml.encode()).hexdigest()[:16]
+    import tasks
+    _, spec = tasks.compile_robot(entry)
+    return hashlib.sha256(spec.to_xml().encode()).hexdigest()[:16]
 
 
 def task_parameters():
@@ -65,7 +86,6 @@ def task_parameters():
     return {
         "sensor_noise": navigation.SENSOR_NOISE,
         "action_noise": navigation.ACTION_NOISE,
-        "start": list(navigation.START),
         "start_jitter_xy": navigation.START_JITTER_XY,
         "start_jitter_heading": navigation.START_JITTER_HEADING,
         "sensor_range": navigation.SENSOR_RANGE,
@@ -80,20 +100,21 @@ def seeds_for(seed):
 
 
 def make_agent(spec, env):
-    """The agent for a run: Table 1 parameters, the condition's fallback behaviour, and
-    for the floating robot eq 3's two modalities (ranges 0.7, velocity 0.3)."""
+    """The agent for a run: Table 1's column for the robot, the condition's fallback
+    behaviour, and eq 3's modalities with their weights (one group per modality)."""
+    entry = spec.entry
     obs = env.observation_spec()
-    n_range = obs["range"].shape[0]
-    obs_dim = n_range + (obs["velocity"].shape[0] if "velocity" in obs else 0)
+    sizes = [obs[key].shape[0] for key, _ in entry.modalities]
     groups = weights = None
-    if "velocity" in obs:
-        groups = [np.arange(n_range), np.arange(n_range, obs_dim)]
-        weights = [0.7, 0.3]
+    if len(sizes) > 1:
+        bounds = np.cumsum([0] + sizes)
+        groups = [np.arange(lo, hi) for lo, hi in zip(bounds[:-1], bounds[1:])]
+        weights = [w for _, w in entry.modalities]
     _, agent_seed = seeds_for(spec.seed)
     config = spec.agent_config()
-    fallback = ebrl.intrinsic.fallback_for(spec.robot, spec.condition,
+    fallback = ebrl.intrinsic.fallback_for(entry.avoidance, spec.condition,
                                            config.intrinsic_random_rate, config.random_sd)
-    return ebrl.Agent(config, obs_dim, env.action_spec().shape[0], fallback,
+    return ebrl.Agent(config, sum(sizes), env.action_spec().shape[0], fallback,
                       groups=groups, group_weights=weights, seed=agent_seed)
 
 
@@ -104,16 +125,24 @@ def _reading_scale():
     return 1.0 / SENSOR_LEVELS
 
 
-def agent_input(observation):
-    """(agent observation, readings for the fallback): readings scaled to [0, 1],
-    then the velocity in units/step for the floating robot."""
-    codes, velocity = observation["range"], observation.get("velocity")
-    if velocity is None:
+def agent_input(observation, keys=("range",)):
+    """(agent observation, readings for the fallback): the modalities `keys` in order,
+    the range readings scaled to [0, 1] (Section 3.4), the others (the velocity, in
+    units/step) as they are."""
+    codes = observation["range"]
+    if len(keys) == 1:
         readings = codes * _reading_scale()
         return readings, readings
-    obs = np.empty(len(codes) + len(velocity))
-    readings = np.multiply(codes, _reading_scale(), out=obs[: len(codes)])
-    obs[len(codes):] = velocity
+    parts = [observation[k] for k in keys]
+    obs = np.empty(sum(len(p) for p in parts))
+    at, readings = 0, None
+    for key, part in zip(keys, parts):
+        view = obs[at: at + len(part)]
+        if key == "range":
+            readings = np.multiply(part, _reading_scale(), out=view)
+        else:
+            view[:] = part
+        at += len(part)
     return obs, readings
 
 
@@ -126,8 +155,9 @@ def execute(spec, on_step=None):
     import tasks
 
     env_seed, _ = seeds_for(spec.seed)
-    env = tasks.load(spec.robot, seed=env_seed)
+    env = tasks.load(spec.entry, seed=env_seed)
     agent = make_agent(spec, env)
+    keys = tuple(key for key, _ in spec.entry.modalities)
     # trace[k]: the position after step k (k = 0: the first start); starts[i]: the
     # start of trial i. Trial i's path is starts[i] then trace[end(i-1)+1 : end(i)+1].
     trace = np.empty((spec.steps + 1, 2), dtype=np.float32)
@@ -138,7 +168,7 @@ def execute(spec, on_step=None):
     starts.append(pose()[:2])
     trace[0] = starts[0]
     for step in range(1, spec.steps + 1):
-        obs, readings = agent_input(ts.observation)
+        obs, readings = agent_input(ts.observation, keys)
         ts = env.step(agent.act(obs, readings=readings))
         agent.learn(ts.reward, ts.last())
         trace[step] = pose()[:2]

@@ -1,4 +1,4 @@
-"""Offscreen pictures of the room: a top-down snapshot and videos with the path drawn.
+"""Offscreen videos of a run, from the room's cameras or the robot's, with the path drawn.
 
 MuJoCo reads MUJOCO_GL once, when dm_control is first imported, so a backend that
 imports but cannot make a context (EGL without a device, say) is only found out by
@@ -64,8 +64,38 @@ def ensure_backend():
     return backend
 
 
-def frame(physics, path_xy=(), height=HEIGHT, width=WIDTH):
-    """A top-down frame; path_xy (paper units) is drawn as a line on the floor."""
+def camera_names(physics):
+    """The cameras a video can use: the room's (top, perspective) and the robot's (by the
+    name in its file)."""
+    from models import PREFIX
+    m = physics.model
+    names = [m.id2name(i, "camera") for i in range(m.ncam)]
+    return [n[len(PREFIX):] if n.startswith(PREFIX) else n for n in names]
+
+
+def check_camera(spec, camera):
+    """RenderingError unless the run's room and robot have `camera`."""
+    import tasks
+    env = tasks.load(spec.entry, seed=0)
+    try:
+        names = camera_names(env.physics)
+    finally:
+        env.close()
+    if camera not in names:
+        raise RenderingError(f"unknown camera {camera!r}; valid: {', '.join(names)}")
+
+
+def _camera_id(physics, camera):
+    from models import PREFIX
+    m = physics.model
+    for name in (camera, PREFIX + camera):
+        if name in [m.id2name(i, "camera") for i in range(m.ncam)]:
+            return name
+    raise RenderingError(f"unknown camera {camera!r}")
+
+
+def frame(physics, path_xy=(), height=HEIGHT, width=WIDTH, camera="top"):
+    """A frame from `camera`; path_xy (paper units) is drawn as a line on the floor."""
     from models import UNIT
 
     def draw(_, scene):
@@ -83,29 +113,13 @@ def frame(physics, path_xy=(), height=HEIGHT, width=WIDTH):
                                  np.array([x0 * UNIT, y0 * UNIT, 0.01]),
                                  np.array([x1 * UNIT, y1 * UNIT, 0.01]))
 
-    return physics.render(height=height, width=width, camera_id="top",
+    return physics.render(height=height, width=width, camera_id=_camera_id(physics, camera),
                           scene_callback=draw if len(path_xy) > 1 else None)
 
 
-def snapshot(path):
-    """Writes a PNG of the room with each robot at its (un-jittered) start, side by side."""
-    import imageio.v3 as iio
-    import numpy as np
-
-    import tasks
-    frames = []
-    for robot in tasks.ROBOTS:
-        env = tasks.load(robot, seed=0, start_jitter=False)
-        env.reset()
-        frames.append(frame(env.physics))
-        env.close()
-    iio.imwrite(path, np.concatenate(frames, axis=1))
-    return path
-
-
-def record(spec, path, *, frames=600, fps=30):
-    """Runs spec exactly as `ebrl run` does and writes an MP4 of it, from the top
-    camera, with the current trial's path drawn; at most `frames` frames."""
+def record(spec, path, *, frames=600, fps=30, camera="top"):
+    """Runs spec exactly as `ebrl run` does and writes an MP4 of it, from `camera`,
+    with the current trial's path drawn; at most `frames` frames."""
     import imageio.v2 as imageio
     import numpy as np
 
@@ -120,7 +134,7 @@ def record(spec, path, *, frames=600, fps=30):
         # Trial path: its start, then the positions since (decimated to bound the scene).
         pts = trace[trial_begin:step + 1]
         pts = np.vstack([start, pts[:: max(1, len(pts) // 400)], pts[-1:]]) if len(pts) else [start]
-        writer.append_data(frame(env.physics, pts))
+        writer.append_data(frame(env.physics, pts, camera=camera))
 
     try:
         result = protocol.execute(spec, on_step=on_step)

@@ -7,29 +7,17 @@ import pathlib
 import numpy as np
 
 from experiments import paper, results
+from tasks.robots import DRIVES
 
 @functools.cache
-def room_rectangles():
-    """(field, obstacles, goal) in paper units, read from models/room.xml, as
-    (x0, x1, y0, y1) rectangles: the room as drawn, from the one source."""
-    import mujoco
-
+def _room_layout():
     import models
-
-    def rect(pos, size):
-        (cx, cy), (hx, hy) = pos[:2] / models.UNIT, size[:2] / models.UNIT
-        return cx - hx, cx + hx, cy - hy, cy + hy
-
-    m = mujoco.MjModel.from_xml_path(str(models.ROOM_FILE))
-    obstacles = [rect(m.geom(i).pos, m.geom(i).size) for i in range(m.ngeom)
-                 if m.geom(i).name.startswith("block_")]
-    floor, goal = m.geom("floor"), m.site("goal")
-    return rect(floor.pos, floor.size), obstacles, rect(goal.pos, goal.size)
+    return models.room_layout(models.room_model())
 
 
 def draw_room(ax):
     from matplotlib.patches import Rectangle
-    field, obstacles, goal = room_rectangles()
+    field, obstacles, goal, _ = _room_layout()
     ax.add_patch(Rectangle((field[0], field[2]), field[1] - field[0], field[3] - field[2],
                            fill=False, lw=2, ec="0.2"))
     for x0, x1, y0, y1 in obstacles:
@@ -57,7 +45,7 @@ def comparison_rows(summary):
     """One row per (group, figure): paper, ours, 95% CI, ratio, paper inside the CI."""
     rows = []
     for g in summary["groups"]:
-        ref = paper.RESULTS.get((g["robot"], g["condition"]))
+        ref = paper.RESULTS.get((g.get("drive"), g["condition"]))
         for key, label, digits in (("first_trial_steps", "first-trial steps", 0),
                                    ("steps_per_trial", "steps per trial", 0),
                                    ("shrink", "shrink (per trial / first)", 2)):
@@ -101,13 +89,16 @@ def goals_table(summary):
 
 
 def claims(summary):
-    """Section 3.6's qualitative claims, each with (claim, ours, verdict)."""
+    """Section 3.6's qualitative claims for each robot, against its drive's figures,
+    each as (claim, ours, verdict)."""
     by = {(g["robot"], g["condition"]): g for g in summary["groups"]}
     out = []
-    for robot, factor in (("two_wheel", 6087 / 956), ("floating", 11129 / 5433)):
+    for robot in dict.fromkeys(g["robot"] for g in summary["groups"]):
         r, a = by.get((robot, "random")), by.get((robot, "avoidance"))
-        if not (r and a):
+        if not (r and a) or (r.get("drive"), "random") not in paper.RESULTS:
             continue
+        ref = {c: paper.RESULTS[(r["drive"], c)] for c in paper.CONDITIONS}
+        factor = ref["random"]["first_trial_steps"]["mean"] / ref["avoidance"]["first_trial_steps"]["mean"]
         fr, fa = r["first_trial_steps"]["mean"], a["first_trial_steps"]["mean"]
         pr, pa = r["steps_per_trial"]["mean"], a["steps_per_trial"]["mean"]
         if fr and fa:
@@ -117,18 +108,20 @@ def claims(summary):
             out.append((f"{robot}: avoidance cuts steps per trial",
                         f"{pr / pa:.1f}x", pa < pr))
         for g in (r, a):
-            ref = paper.RESULTS[(robot, g["condition"])]["shrink"]
+            shrink = ref[g["condition"]]["shrink"]
             if g["shrink"] is not None:
                 ci = g["shrink_ci95"]
-                out.append((f"{robot} {g['condition']}: learning shrinks trials (paper {ref:.0%})",
+                out.append((f"{robot} {g['condition']}: learning shrinks trials (paper {shrink:.0%})",
                             f"{g['shrink']:.0%}" + (f" (95% CI {ci[0]:.0%}-{ci[1]:.0%})" if ci else ""),
                             (ci[1] < 1.0) if ci else g["shrink"] < 1.0))
-    r, a = by.get(("two_wheel", "random")), by.get(("two_wheel", "avoidance"))
-    if r and a and r["steps"] == paper.BUDGETS["two_wheel"]:
-        out.append(("two_wheel random: most runs reach fewer than 30 goals in 30,000 steps (paper 43/50)",
-                    f"{r['goals']['below_30']}/{r['seeds']}", r["goals"]["below_30"] > r["seeds"] / 2))
-        out.append(("two_wheel avoidance: every run reaches at least 49 goals (paper min 49)",
-                    f"min {a['goals']['min']}", a["goals"]["min"] >= 49))
+        if r["drive"] == "two_wheel" and r["steps"] == a["steps"] == DRIVES["two_wheel"].budget:
+            goals = paper.TWO_WHEEL_GOALS
+            out.append((f"{robot} random: most runs reach fewer than 30 goals in 30,000 steps "
+                        f"(paper {goals['random_below_30']}/50)",
+                        f"{r['goals']['below_30']}/{r['seeds']}", r["goals"]["below_30"] > r["seeds"] / 2))
+            out.append((f"{robot} avoidance: every run reaches at least {goals['avoidance_min']} "
+                        f"goals (paper min {goals['avoidance_min']})",
+                        f"min {a['goals']['min']}", a["goals"]["min"] >= goals["avoidance_min"]))
     return out
 
 
@@ -229,7 +222,7 @@ def first_vs_learned_figure(summary, path):
         err = np.array([[m - (g[key]["ci95"] or [m, m])[0], (g[key]["ci95"] or [m, m])[1] - m]
                         for m, g in zip(means, groups)]).T
         ax.bar(x + off, means, 0.34, color=colour, label=f"ours: {label}", yerr=err, capsize=3)
-        ref = [paper.RESULTS.get((g["robot"], g["condition"]), {}).get(key, {}).get("mean")
+        ref = [paper.RESULTS.get((g.get("drive"), g["condition"]), {}).get(key, {}).get("mean")
                for g in groups]
         ax.plot(x + off, [np.nan if v is None else v for v in ref], "k_", ms=18, mew=2,
                 label=f"paper: {label}" if off < 0 else None)
@@ -286,7 +279,7 @@ def build(root):
     summary = results.summarize(runs)
     figures = root / "figures"
     figures.mkdir(exist_ok=True)
-    robots = [r for r in paper.ROBOTS if any(k[0] == r for k in runs)]
+    robots = sorted({k[0] for k in runs}, key=lambda r: (results.robot_order(r), r))
     for robot in robots:
         cumulative_reward_figure(root, runs, robot, figures / f"cumulative_reward_{robot}.png")
         traces_figure(root, runs, robot, figures / f"traces_{robot}.png")

@@ -76,7 +76,7 @@ def versions():
 
 
 def run_dir(root, spec):
-    return pathlib.Path(root) / spec.robot / spec.condition / f"seed_{spec.seed:03d}"
+    return pathlib.Path(root) / spec.label / spec.condition / f"seed_{spec.seed:03d}"
 
 
 def write_run(root, spec, result, versions_info):
@@ -170,6 +170,14 @@ def trial_paths(trace, starts, trial_ends):
 
 
 # -- summary -----------------------------------------------------------------------
+def robot_order(robot):
+    """Registered robots in the registry's order, then the others."""
+    from tasks.robots import ROBOTS
+    names = list(ROBOTS)
+    return names.index(robot) if robot in names else len(names)
+
+
+
 def bootstrap_ci(values, rng, stat=np.mean):
     """95% percentile bootstrap interval of stat over values (None if < 2 values)."""
     values = np.asarray(values, dtype=np.float64)
@@ -192,9 +200,8 @@ def _stats(values, rng):
 def summarize(runs):
     """summary.json's content from load_runs()' runs. Deterministic for the same runs."""
     groups = []
-    keys = sorted({(r, c) for r, c, _ in runs},
-                  key=lambda k: (paper.ROBOTS.index(k[0]) if k[0] in paper.ROBOTS else 9,
-                                 paper.CONDITIONS.index(k[1]) if k[1] in paper.CONDITIONS else 9))
+    keys = sorted({(r, c) for r, c, _ in runs}, key=lambda k: (robot_order(k[0]), k[0],
+                  paper.CONDITIONS.index(k[1]) if k[1] in paper.CONDITIONS else 9))
     for robot, condition in keys:
         rng = np.random.default_rng(BOOTSTRAP_SEED)
         seeds = sorted(s for r, c, s in runs if (r, c) == (robot, condition))
@@ -216,6 +223,7 @@ def summarize(runs):
             shrink_ci = [float(x) for x in np.percentile(ratios, [2.5, 97.5])]
         groups.append({
             "robot": robot, "condition": condition,
+            "drive": runs[(robot, condition, seeds[0])]["parameters"].get("drive"),
             "steps": steps[0] if len(steps) == 1 else steps,
             "seeds": len(seeds),
             "first_trial_steps": f,

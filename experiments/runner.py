@@ -15,10 +15,20 @@ _SINGLE_THREAD = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
                                    "MKL_NUM_THREADS")}
 
 
-def plan(robots, conditions, seeds, steps, overrides=()):
-    """Specs in the order to start them: the longest first, for an even finish."""
-    specs = [protocol.RunSpec(r, c, s, steps[r] if isinstance(steps, dict) else steps,
-                              tuple(sorted(dict(overrides).items())))
+def plan(robots, conditions, seeds, steps=None, overrides=(), drive=None):
+    """Specs in the order to start them: the longest first, for an even finish.
+
+    steps: None for each robot's budget (the registry's), a number for all, or a dict
+    by robot; drive: for robots given as files."""
+    from tasks.robots import resolve
+
+    def budget(robot):
+        if isinstance(steps, dict):
+            return steps[robot]
+        return steps if steps is not None else resolve(robot, drive).budget
+
+    specs = [protocol.RunSpec(r, c, s, budget(r), tuple(sorted(dict(overrides).items())),
+                              drive)
              for r in robots for c in conditions for s in seeds]
     return sorted(specs, key=lambda s: -s.steps)
 

@@ -1,26 +1,38 @@
-"""Floating robot (Unemi 2000, Section 3.3): a frictionless puck with x/y thrusters.
+"""The floating drive (Unemi 2000, Section 3.3): thrust, then coast.
 
 Action (ah, av) in [-1, 1]^2: at the start of the step the velocity changes by
-0.2 (ah, av) units/step (each axis scaled by noise), then the puck coasts with its
-own velocity until it bumps into something. It starts at rest.
+0.2 (ah, av) units/step (each axis scaled by noise), then the robot coasts with its
+own velocity until it bumps into something. It starts at rest. The robot file's
+actuators ``thrust_x`` and ``thrust_y`` push along the world's x and y axes
+(motors on slide joints, or on a site with a world-fixed reference site).
 """
+import mujoco
+
 from models import UNIT
 from tasks import navigation
 
 MAX_ACCELERATION = 0.2  # units per step, per step
 
-# The thrust acts during the first substep, then the puck coasts for the rest.
-SUBSTEPS = 10
+# Seconds per agent step; the thrust acts during its first substep, then the robot
+# coasts for the rest. At the planar robots' 0.05 s timestep: 10 substeps.
+STEP_SECONDS = 0.5
 
 
 class Physics(navigation.Physics):
-    """Adds the thrusters, as force motors on the slide joints."""
+    """Adds the thrusters, as force motors along the world's x and y."""
 
     def _reload_from_data(self, data):
         super()._reload_from_data(data)
-        self._thrust_x = self.model.name2id("robot/thrust_x", "actuator")
-        self._thrust_y = self.model.name2id("robot/thrust_y", "actuator")
-        self._mass = float(self.model.body_subtreemass[self.model.name2id("robot/base", "body")])
+        m = self.model
+        self._thrust_x = navigation._id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, "thrust_x")
+        self._thrust_y = navigation._id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, "thrust_y")
+        if self._thrust_x < 0 or self._thrust_y < 0:
+            raise navigation.ContractError("the floating drive needs actuators 'thrust_x' "
+                                           "and 'thrust_y'")
+        if self._beams.stop - self._beams.start != 8:
+            raise navigation.ContractError(
+                "the floating drive needs 8 rangefinders (E, NE, N, NW, W, SW, S, SE; eq 10)")
+        self._mass = float(m.body_subtreemass[self._base])
 
     def thrust(self, dvx, dvy):
         """Sets the thrust that changes the velocity by (dvx, dvy) units/step in one substep."""
@@ -34,7 +46,7 @@ class Floating(navigation.Navigation):
     action_dim = 2
 
     def initialize_episode(self, physics):
-        physics.step_seconds = SUBSTEPS * physics.timestep
+        physics.step_seconds = substeps(physics.timestep) * physics.timestep
         super().initialize_episode(physics)
 
     def get_observation(self, physics):
@@ -48,4 +60,14 @@ class Floating(navigation.Navigation):
         physics.thrust(MAX_ACCELERATION * ah * nh, MAX_ACCELERATION * av * nv)
         physics.step(1)
         physics.thrust(0.0, 0.0)
-        # The environment then coasts for SUBSTEPS - 1 substeps.
+        # The environment then coasts for the other substeps.
+
+
+def substeps(timestep):
+    """Substeps per agent step."""
+    return max(1, round(STEP_SECONDS / timestep))
+
+
+def move_substeps(timestep):
+    """Substeps the environment runs per agent step: the coast after the thrust."""
+    return substeps(timestep) - 1

@@ -1,8 +1,13 @@
-"""The navigation task shared by both robots (Unemi 2000, Sections 3.1-3.2).
+"""The navigation task shared by every robot (Unemi 2000, Sections 3.1-3.2).
 
 `Physics` holds the named read-outs in paper units; `Navigation` owns the reward
 at the goal, the start jitter, the rangefinder encoding and noise, termination
-and the action noise. Each robot's module adds only its action mapping.
+and the action noise. Each drive's module (two_wheel, floating) adds only its
+action mapping.
+
+Read-outs come from the robot's base body (``robot/base``): position and heading
+from its frame, planar velocity from its body velocity, so slide joints and free
+joints work alike. The rest of the naming contract is in docs/adding_a_robot.md.
 """
 import collections
 import math
@@ -14,11 +19,10 @@ from dm_control.rl import control
 from dm_control.suite import base
 from dm_env import specs
 
-from models import UNIT
+from models import PREFIX, UNIT, room_layout
 
-# Section 3.1: start 5 units from the left edge and 25 below the top edge
-# (y = 60 - 25), heading right (+x), jittered by +-3 units and +-15 degrees.
-START = (5.0, 35.0, 0.0)
+# Section 3.1: the start pose is the room's "start" site (5 units from the left edge,
+# 25 below the top edge, heading right), jittered by +-3 units and +-15 degrees.
 START_JITTER_XY = 3.0
 START_JITTER_HEADING = np.deg2rad(15.0)
 
@@ -29,6 +33,13 @@ SENSOR_NOISE = 0.05 * SENSOR_LEVELS  # 12.75
 
 # Section 3.3: each action component is scaled by a factor drawn from [1 - 0.05, 1].
 ACTION_NOISE = 0.05
+
+#: A 3D robot tilted more than this (degrees) has fallen over: the step raises.
+MAX_TILT_DEGREES = 10.0
+
+
+class ContractError(ValueError):
+    """A robot file that lacks a part the naming contract asks for."""
 
 
 def encode_range(distance):
@@ -44,53 +55,115 @@ def encode_range(distance):
     return np.maximum(code, 0.0, out=code)
 
 
+def _id(model, kind, name):
+    return mujoco.mj_name2id(model.ptr, kind, PREFIX + name)
+
+
 class Physics(dm_mujoco.Physics):
-    """Named read-outs of the room with one robot, in paper units and radians."""
+    """Named read-outs of the room with one robot, in paper units and radians.
+
+    Sensors are computed once per agent step, not on every substep: MuJoCo's sensor
+    stage is disabled and `ranges()` runs it at the state it reads (mj_sensorPos),
+    which gives the same readings bit for bit."""
 
     def _reload_from_data(self, data):
         super()._reload_from_data(data)
         m = self.model
-        jx, jy = m.name2id("robot/x", "joint"), m.name2id("robot/y", "joint")
-        yaw = mujoco.mj_name2id(m.ptr, mujoco.mjtObj.mjOBJ_JOINT, "robot/yaw")
-        self._qx, self._qy = int(m.jnt_qposadr[jx]), int(m.jnt_qposadr[jy])
-        self._dx, self._dy = int(m.jnt_dofadr[jx]), int(m.jnt_dofadr[jy])
-        self._qyaw = int(m.jnt_qposadr[yaw]) if yaw >= 0 else None
-        self.robot_radius = m.geom_size[m.name2id("robot/hull", "geom"), 0] / UNIT
+        mjm = m.ptr
+        self._base = _id(m, mujoco.mjtObj.mjOBJ_BODY, "base")
+        if self._base < 0:
+            raise ContractError("no body named 'base' (the robot's base body)")
+        hull = _id(m, mujoco.mjtObj.mjOBJ_GEOM, "hull")
+        if hull < 0:
+            raise ContractError("no geom named 'hull' (the bumper; its radius is the robot's)")
+        #: The robot's radius in units: its hull's (sphere or cylinder) radius.
+        self.robot_radius = m.geom_size[hull, 0] / UNIT
         beams = np.flatnonzero(m.sensor_type == mujoco.mjtSensor.mjSENS_RANGEFINDER)
+        if not len(beams):
+            raise ContractError("no rangefinder sensors")
         adr = m.sensor_adr[beams]
         if not np.array_equal(adr, np.arange(adr[0], adr[0] + len(adr))):
-            raise ValueError("rangefinders must be declared one after another")
+            raise ContractError("rangefinders must be declared one after another")
         self._beams = slice(int(adr[0]), int(adr[0]) + len(adr))
+        self._find_base_joints(m)
         # MuJoCo's own arrays, read and written every step without dm_control's wrappers.
-        self._mj = (m.ptr, data.ptr)
+        self._mj = (mjm, data.ptr)
         self._qpos, self._qvel = data.ptr.qpos, data.ptr.qvel
         self._ctrl, self._sensordata = data.ptr.ctrl, data.ptr.sensordata
+        self._act = data.ptr.act
+        self._xpos, self._xmat = data.ptr.xpos[self._base], data.ptr.xmat[self._base]
+        self._body_velocity = np.zeros(6)
         self._bad_qacc = data.ptr.warning[mujoco.mjtWarning.mjWARN_BADQACC]
+        self._sensor_bit = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
+        mjm.opt.disableflags |= self._sensor_bit
         #: The room's timestep in seconds.
-        self.timestep = float(m.opt.timestep)
+        self.timestep = float(mjm.opt.timestep)
         #: Substeps run so far, for benchmarks against raw mujoco.mj_step.
         self.substeps = 0
-        goal = m.name2id("goal", "site")
-        centre, half = m.site_pos[goal, :2] / UNIT, m.site_size[goal, :2] / UNIT
-        self.goal_box = (centre - half, centre + half)
+        field, _, goal, self.start = room_layout(m)
+        self.goal_box = (np.array(goal[::2]), np.array(goal[1::2]))
         #: Seconds of simulated time per agent step; set by the task.
         self.step_seconds = 1.0
 
+    def _find_base_joints(self, m):
+        """The base's joints: one free joint, or slide x and slide y (and hinge yaw)."""
+        joints = [j for j in range(m.njnt) if m.jnt_bodyid[j] == self._base]
+        kinds = [int(m.jnt_type[j]) for j in joints]
+        self._free = self._qx = self._qy = self._qyaw = None
+        #: The base's planar joints by role ("x", "y", "yaw"), as joint ids.
+        self.base_joints = {}
+        if kinds == [mujoco.mjtJoint.mjJNT_FREE]:
+            self._free = int(m.jnt_qposadr[joints[0]])
+            self._rest_height = float(m.qpos0[self._free + 2])
+            return
+        for j, kind in zip(joints, kinds):
+            axis = tuple(np.round(m.jnt_axis[j], 12))
+            if kind == mujoco.mjtJoint.mjJNT_SLIDE and axis == (1, 0, 0):
+                self.base_joints["x"] = j
+            elif kind == mujoco.mjtJoint.mjJNT_SLIDE and axis == (0, 1, 0):
+                self.base_joints["y"] = j
+            elif kind == mujoco.mjtJoint.mjJNT_HINGE and axis == (0, 0, 1):
+                self.base_joints["yaw"] = j
+        adr = {role: int(m.jnt_qposadr[j]) for role, j in self.base_joints.items()}
+        self._qx, self._qy, self._qyaw = adr.get("x"), adr.get("y"), adr.get("yaw")
+        if self._qx is None or self._qy is None:
+            raise ContractError("the base body needs a free joint, or slide joints along "
+                                "x and y (and optionally a hinge about z)")
+
     # -- read-outs ---------------------------------------------------------
     def robot_pose(self):
-        """(x, y, heading) in paper units and radians; heading 0 for a robot without yaw."""
-        q = self._qpos
-        heading = float(q[self._qyaw]) if self._qyaw is not None else 0.0
-        return float(q[self._qx]) / UNIT, float(q[self._qy]) / UNIT, heading
+        """(x, y, heading) of the base body's frame in paper units and radians.
+
+        A base turning on a hinge about z reports the hinge's angle, which is the frame's
+        heading exactly (the frame's rotation matrix, made through a quaternion, rounds
+        it in the last bits); any other base, its frame's x axis in the plane."""
+        p = self._xpos
+        if self._qyaw is not None:
+            heading = float(self._qpos[self._qyaw])
+        else:
+            r = self._xmat
+            heading = math.atan2(r[3], r[0])
+        return float(p[0]) / UNIT, float(p[1]) / UNIT, heading
+
+    def tilt(self):
+        """Angle in radians between the base's z axis and the vertical."""
+        return math.acos(min(1.0, max(-1.0, float(self._xmat[8]))))
 
     def robot_velocity(self):
-        """(vx, vy) in paper units per agent step."""
-        v = self._qvel
+        """(vx, vy) of the base body's frame in paper units per agent step."""
+        model, data = self._mj
+        v = self._body_velocity
+        mujoco.mj_objectVelocity(model, data, mujoco.mjtObj.mjOBJ_BODY, self._base, v, 0)
         scale = self.step_seconds / UNIT
-        return np.array([v[self._dx] * scale, v[self._dy] * scale])
+        return np.array([v[3] * scale, v[4] * scale])
 
     def ranges(self):
-        """Distance from the body surface along each beam, in units; inf where nothing is hit."""
+        """Distance from the body surface along each beam, in units; inf where nothing is
+        hit. Runs the sensor stage once, at the current state."""
+        model, data = self._mj
+        model.opt.disableflags &= ~self._sensor_bit
+        mujoco.mj_sensorPos(model, data)
+        model.opt.disableflags |= self._sensor_bit
         raw = self._sensordata[self._beams]
         distance = raw * (1.0 / UNIT)
         distance -= self.robot_radius
@@ -104,9 +177,9 @@ class Physics(dm_mujoco.Physics):
         return bool(lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1])
 
     def step(self, nstep=1):
-        """dm_control's legacy step (mj_step2, mj_step(n-1), mj_step1), so sensors and
-        contacts describe the new state, without its per-call Python overhead.
-        Raises PhysicsError when MuJoCo flags an unstable state."""
+        """dm_control's legacy step (mj_step2, mj_step(n-1), mj_step1), so contacts and
+        kinematics describe the new state, without its per-call Python overhead.
+        Raises PhysicsError when MuJoCo flags an unstable state or a 3D robot tips over."""
         model, data = self._mj
         before = self._bad_qacc.number
         mujoco.mj_step2(model, data)
@@ -116,16 +189,30 @@ class Physics(dm_mujoco.Physics):
         self.substeps += nstep
         if self._bad_qacc.number != before:
             raise control.PhysicsError(f"unstable simulation at t={data.time:.3f} s")
+        if self._free is not None and self._xmat[8] < self._min_cos_tilt:
+            raise control.PhysicsError(f"the robot tipped over at t={data.time:.3f} s "
+                                       f"(tilt {math.degrees(self.tilt()):.0f} degrees)")
+
+    _min_cos_tilt = math.cos(math.radians(MAX_TILT_DEGREES))
 
     # -- setters -----------------------------------------------------------
     def set_robot_pose(self, x, y, heading=0.0):
-        """Places the robot at (x, y, heading), in units and radians, at rest."""
+        """Places the robot at (x, y, heading), in units and radians, at rest; a free-joint
+        robot upright at the height its file gives it, every other joint at its rest."""
         q = self._qpos
-        q[self._qx], q[self._qy] = x * UNIT, y * UNIT
-        if self._qyaw is not None:
-            q[self._qyaw] = heading
+        if self._free is not None:
+            model, _ = self._mj
+            q[:] = model.qpos0
+            a = self._free
+            q[a: a + 3] = x * UNIT, y * UNIT, self._rest_height
+            q[a + 3: a + 7] = math.cos(heading / 2), 0.0, 0.0, math.sin(heading / 2)
+        else:
+            q[self._qx], q[self._qy] = x * UNIT, y * UNIT
+            if self._qyaw is not None:
+                q[self._qyaw] = heading
         self._qvel[:] = 0.0
         self._ctrl[:] = 0.0
+        self._act[:] = 0.0
         self.forward()
 
 
@@ -144,7 +231,7 @@ class Navigation(base.Task):
 
     # -- episode -------------------------------------------------------------
     def initialize_episode(self, physics):
-        x, y, heading = START
+        x, y, heading = physics.start
         if self.start_jitter:
             jx, jy = self.random.uniform(-START_JITTER_XY, START_JITTER_XY, size=2)
             jh = self.random.uniform(-START_JITTER_HEADING, START_JITTER_HEADING)

@@ -1,11 +1,19 @@
-"""Two-wheel robot (Unemi 2000, Section 3.3): turn, then move, in one agent step.
+"""The two-wheel drive (Unemi 2000, Section 3.3): turn, then move, in one agent step.
 
 Action a in [-1, 1]: turn |a| rad (a < 0 left, counter-clockwise; a > 0 right),
 then move 2 (1 - |a|) units forward. When a collision stops the move, the rest
 of it becomes turn in the same direction as the commanded turn (right when a = 0),
 at the action's own rate of 1 rad per 2 units. Each part is scaled by noise.
+
+Two ways to realise it, picked by the robot file's actuators (docs/adding_a_robot.md):
+- `Physics`: a planar base whose velocity servos ``forward``, ``turn`` (and ``grip``)
+  drive the speed along the heading and the yaw rate directly (`two_wheel`).
+- `WheelPhysics`: two wheel hinges ``left_wheel`` and ``right_wheel`` rolling on the
+  floor, under position servos whose targets follow the turn or the move (`diff_drive`).
 """
 import math
+
+import numpy as np
 
 from models import UNIT
 from tasks import navigation
@@ -13,28 +21,45 @@ from tasks import navigation
 MAX_TURN = 1.0  # rad per step
 MAX_MOVE = 2.0  # units per step
 
-# Substeps of the room's 0.05 s timestep in each phase of an agent step.
-TURN_SUBSTEPS = 4
-MOVE_SUBSTEPS = 8
+# Seconds of each phase of an agent step: a turn, then a move, then (when blocked) a
+# leftover turn. At the planar robots' 0.05 s timestep: 4 + 8 (+ 4) substeps.
+TURN_SECONDS = 0.2
+MOVE_SECONDS = 0.4
 # A move that falls short of its command by more than this (units) was stopped.
 BLOCKED_TOLERANCE = 0.1
 
 
+def substeps(seconds, timestep):
+    """Whole substeps of `timestep` in `seconds` (at least one)."""
+    return max(1, round(seconds / timestep))
+
+
 class Physics(navigation.Physics):
-    """Adds the drive: speed along the heading and yaw rate, each a velocity servo."""
+    """A planar base driven by velocity servos on its speed along the heading and its
+    yaw rate (the wheels' mean and difference)."""
 
     def _reload_from_data(self, data):
         super()._reload_from_data(data)
         m = self.model
-        self._forward = m.name2id("robot/forward", "actuator")
-        self._turn = m.name2id("robot/turn", "actuator")
+        ids = {name: navigation._id(m, navigation.mujoco.mjtObj.mjOBJ_ACTUATOR, name)
+               for name in ("forward", "turn", "grip")}
+        if ids["forward"] < 0 or ids["turn"] < 0:
+            raise navigation.ContractError(
+                "the two_wheel drive needs actuators 'forward' and 'turn' (a planar base) "
+                "or 'left_wheel' and 'right_wheel' (wheels)")
+        self._forward, self._turn = ids["forward"], ids["turn"]
         # Deadbeat servos: kv = driven inertia / timestep reaches the target speed in one
         # semi-implicit Euler step. The base's mass drives forward and grip, its yaw
         # inertia the turn.
-        mass = 1.0 / m.dof_invweight0[self._dx]
-        yaw_inertia = 1.0 / m.dof_invweight0[m.jnt_dofadr[m.name2id("robot/yaw", "joint")]]
+        if "yaw" not in self.base_joints:
+            raise navigation.ContractError("a planar two_wheel base needs a hinge about z")
+        dof = {role: m.jnt_dofadr[j] for role, j in self.base_joints.items()}
+        mass = 1.0 / m.dof_invweight0[dof["x"]]
+        yaw_inertia = 1.0 / m.dof_invweight0[dof["yaw"]]
         for name, inertia in (("forward", mass), ("grip", mass), ("turn", yaw_inertia)):
-            i = m.name2id(f"robot/{name}", "actuator")
+            i = ids[name]
+            if i < 0:
+                continue
             kv = inertia / m.opt.timestep
             m.actuator_gainprm[i, 0] = kv
             m.actuator_biasprm[i, 2] = -kv
@@ -45,12 +70,26 @@ class Physics(navigation.Physics):
         ctrl[self._forward] = speed * UNIT
         ctrl[self._turn] = yaw_rate
 
+    def begin_turn(self, angle, n):
+        """Sets the drive to turn by `angle` rad (counter-clockwise) over n substeps."""
+        self.drive(0.0, angle / (n * self.timestep))
+
+    def begin_move(self, distance, n):
+        """Sets the drive to move `distance` units forward over n substeps."""
+        self.drive(distance / (n * self.timestep), 0.0)
+
+    def halt(self):
+        self.drive(0.0, 0.0)
+
 
 class TwoWheel(navigation.Navigation):
     action_dim = 1
 
     def initialize_episode(self, physics):
-        physics.step_seconds = (TURN_SUBSTEPS + MOVE_SUBSTEPS) * physics.timestep
+        dt = physics.timestep
+        self._n_turn = substeps(TURN_SECONDS, dt)
+        self._n_move = substeps(MOVE_SECONDS, dt)
+        physics.step_seconds = (self._n_turn + self._n_move) * dt
         super().initialize_episode(physics)
 
     def before_step(self, action, physics):
@@ -59,22 +98,29 @@ class TwoWheel(navigation.Navigation):
         turn = -a * MAX_TURN * noise_turn  # counter-clockwise positive
         self._move = MAX_MOVE * (1.0 - abs(a)) * noise_move
         self._turn_sign = 1.0 if turn > 0 else -1.0
-        dt = physics.timestep
-        physics.drive(0.0, turn / (TURN_SUBSTEPS * dt))
-        physics.step(TURN_SUBSTEPS)
+        physics.begin_turn(turn, self._n_turn)
+        physics.step(self._n_turn)
         x, y, heading = physics.robot_pose()
         self._from = (x, y, math.cos(heading), math.sin(heading))
-        # The environment then runs the move phase: MOVE_SUBSTEPS substeps.
-        physics.drive(self._move / (MOVE_SUBSTEPS * dt), 0.0)
+        # The environment then runs the move phase (move_substeps).
+        physics.begin_move(self._move, self._n_move)
 
     def after_step(self, physics):
         x, y, _ = physics.robot_pose()
         x0, y0, c, s = self._from
         rest = self._move - ((x - x0) * c + (y - y0) * s)
         if rest > BLOCKED_TOLERANCE:
-            dt = physics.timestep
             leftover = self._turn_sign * rest * MAX_TURN / MAX_MOVE
-            physics.drive(0.0, leftover / (TURN_SUBSTEPS * dt))
-            physics.step(TURN_SUBSTEPS)
-        physics.drive(0.0, 0.0)
+            physics.begin_turn(leftover, self._n_turn)
+            physics.step(self._n_turn)
+        physics.halt()
         super().after_step(physics)
+
+
+def move_substeps(timestep):
+    """Substeps the environment runs per agent step: the move phase."""
+    return substeps(MOVE_SECONDS, timestep)
+
+
+class WheelPhysics(Physics):
+    """Placeholder."""

@@ -48,7 +48,7 @@ def test_same_seed_same_actions():
 
 @pytest.mark.filterwarnings("ignore:overflow encountered")  # |x|^2 of the too-large input
 def test_bad_observations_raise():
-    ag = ebrl.Agent(ebrl.paper_config("two_wheel"), 7, 1, intrinsic.RandomWalk(1), seed=0)
+    ag = ebrl.Agent(ebrl.paper_config("T"), 7, 1, intrinsic.RandomWalk(1), seed=0)
     with pytest.raises(ValueError, match="shape"):
         ag.act(np.zeros(6))
     with pytest.raises(ValueError, match="NaN"):
@@ -74,11 +74,11 @@ def test_bad_config_names_the_field(field, value):
 def test_memory_smaller_than_recall_table_and_paper_config():
     with pytest.raises(ValueError, match="memory_size"):
         ebrl.Config(memory_size=5, recall_size=7)
-    assert ebrl.paper_config("two_wheel").memory_size == 1024
-    f = ebrl.paper_config("floating")
+    assert ebrl.paper_config("T").memory_size == 1024
+    f = ebrl.paper_config("F")
     assert (f.memory_size, f.recall_size, f.alpha, f.exploration_rate, f.discount,
             f.time_discount, f.reliability_rate) == (4096, 7, 0.5, 0.05, 0.99, 0.99, 0.5)
-    with pytest.raises(ValueError, match="two_wheel"):
+    with pytest.raises(ValueError, match="Table 1 column"):
         ebrl.paper_config("hexapod")
 
 

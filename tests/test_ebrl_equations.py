@@ -106,22 +106,22 @@ def test_policy_threshold_and_empty_table_use_the_fallback():
 
 
 def test_eq8_two_wheel_avoidance_by_hand():
-    assert intrinsic.avoid_two_wheel([1, 0, 0, 0, 0, 0, 0]) == pytest.approx(1 / 6)
-    assert intrinsic.avoid_two_wheel([0, 0, 1, 0, 0, 0, 0]) == pytest.approx(3 / 6)
-    assert intrinsic.avoid_two_wheel([0, 0, 0, 0, 0, 0.5, 0]) == pytest.approx(-2 * 0.5 / 6)
-    assert intrinsic.avoid_two_wheel([0.3, 0.2, 0.9, 1, 0.9, 0.2, 0.3]) == pytest.approx(0.0)
+    assert intrinsic.avoid_by_turning([1, 0, 0, 0, 0, 0, 0]) == pytest.approx(1 / 6)
+    assert intrinsic.avoid_by_turning([0, 0, 1, 0, 0, 0, 0]) == pytest.approx(3 / 6)
+    assert intrinsic.avoid_by_turning([0, 0, 0, 0, 0, 0.5, 0]) == pytest.approx(-2 * 0.5 / 6)
+    assert intrinsic.avoid_by_turning([0.3, 0.2, 0.9, 1, 0.9, 0.2, 0.3]) == pytest.approx(0.0)
 
 
 def test_eq9_eq10_floating_avoidance_by_hand():
     # Obstacle west only: b_h = 0.5 * 1 = 0.5 -> (0.5 - 0.25) / 0.75 = 1/3; b_v = 0
-    np.testing.assert_allclose(intrinsic.avoid_floating([0, 0, 0, 0, 1, 0, 0, 0]), [1 / 3, 0])
+    np.testing.assert_allclose(intrinsic.avoid_by_accelerating([0, 0, 0, 0, 1, 0, 0, 0]), [1 / 3, 0])
     # North and north-east: b_h = 0.25 * (-1) = -0.25 -> (-0.25 + 0.25)/0.75 = 0 (edge of the dead zone)
     # b_v = 0.5 * (0 - 1) + 0.25 * (0 - 1) = -0.75 -> (-0.75 + 0.25) / 0.75 = -2/3
-    np.testing.assert_allclose(intrinsic.avoid_floating([0, 1, 1, 0, 0, 0, 0, 0]), [0, -2 / 3])
+    np.testing.assert_allclose(intrinsic.avoid_by_accelerating([0, 1, 1, 0, 0, 0, 0, 0]), [0, -2 / 3])
     # Inside the dead zone: "not changed" = zero acceleration.
-    np.testing.assert_allclose(intrinsic.avoid_floating([0.2, 0, 0, 0, 0, 0, 0, 0]), [0, 0])
+    np.testing.assert_allclose(intrinsic.avoid_by_accelerating([0.2, 0, 0, 0, 0, 0, 0, 0]), [0, 0])
     # Full push from the south-west corner.
-    np.testing.assert_allclose(intrinsic.avoid_floating([0, 0, 0, 1, 1, 1, 1, 1]),
+    np.testing.assert_allclose(intrinsic.avoid_by_accelerating([0, 0, 0, 1, 1, 1, 1, 1]),
                                [(0.5 + 0.25 * 1 - 0.25) / 0.75, (0.5 + 0.25 * 1 - 0.25) / 0.75])
 
 
@@ -130,9 +130,9 @@ def test_random_action_is_clipped_gaussian_sd_half():
     a = np.array([intrinsic.random_action(rng, 1)[0] for _ in range(20000)])
     assert a.min() >= -1 and a.max() <= 1 and (np.abs(a) == 1).mean() > 0.03  # ~4.6% clipped
     assert abs(a.mean()) < 0.02 and 0.45 < a.std() < 0.5
-    fb = intrinsic.fallback_for("two_wheel", "avoidance")
+    fb = intrinsic.fallback_for("eq8", "avoidance")
     near_left = np.array([1, 1, 1, 0, 0, 0, 0.0])
     acts = np.array([fb(near_left, rng)[0] for _ in range(5000)])
     assert 0.75 < np.isclose(acts, 1.0).mean() < 0.85  # eq 8 gives 1.0 80% of the time
     with pytest.raises(ValueError, match="condition"):
-        intrinsic.fallback_for("two_wheel", "fuzzy")
+        intrinsic.fallback_for("eq8", "fuzzy")

@@ -36,7 +36,7 @@ def arrays(out):
     return got
 
 
-SMALL = ["--robot", "all", "--condition", "all", "--seeds", "0-1", "--steps", "400", "--no-progress"]
+SMALL = ["--robot", "paper", "--condition", "all", "--seeds", "0-1", "--steps", "400", "--no-progress"]
 
 
 @pytest.fixture(scope="module")
@@ -232,6 +232,6 @@ def test_intrinsic_parameters_reach_the_fallback():
         rng = np.random.default_rng(0)
         readings = np.array([1.0, 0, 0, 0, 0, 0, 0])
         # With the random replacement off, eq 8 acts every time.
-        assert all(fb(readings, rng)[0] == intrinsic.avoid_two_wheel(readings) for _ in range(50))
+        assert all(fb(readings, rng)[0] == intrinsic.avoid_by_turning(readings) for _ in range(50))
     finally:
         env.close()

@@ -198,7 +198,9 @@ def test_start_jitter_stays_within_bounds_and_spreads():
     for _ in range(300):
         env.reset()
         poses.append(env.physics.robot_pose())
-    poses = np.array(poses) - np.array(navigation.START)
+    start = (5.0, 35.0, 0.0)  # Section 3.1: 5 from the left, 25 below the top, heading right
+    assert env.physics.start == start
+    poses = np.array(poses) - np.array(start)
     bounds = [3.0, 3.0, np.deg2rad(15)]
     for k in range(3):
         assert np.abs(poses[:, k]).max() <= bounds[k] + 1e-9
@@ -207,7 +209,7 @@ def test_start_jitter_stays_within_bounds_and_spreads():
     env.close()
     still = tasks.load("two_wheel", seed=7, start_jitter=False)
     still.reset()
-    assert still.physics.robot_pose() == pytest.approx(navigation.START)
+    assert still.physics.robot_pose() == pytest.approx(start)
     still.close()
 
 

@@ -1,0 +1,90 @@
+"""The robot registry: every robot the package knows, in one place.
+
+A robot is an MJCF file plus the paper's settings that go with its drive (the action
+family of Section 3.3). The drive gives the defaults: its Table 1 column (memory
+size), its Section 3.6 step budget, its intrinsic behaviour (Section 3.4) and its
+sensor modalities with eq 3's weights; an entry may override any of them, and may set
+its own timestep and integrator (the room's are the planar robots': 0.05 s, Euler).
+
+Every command, figure and table takes its robots from `ROBOTS`; `resolve` also
+accepts a path to a robot file of the user's, with a drive. This module imports
+nothing heavy, so the command line can check names before any work.
+"""
+import dataclasses
+import pathlib
+
+MODEL_DIR = pathlib.Path(__file__).resolve().parents[1] / "models"
+
+
+@dataclasses.dataclass(frozen=True)
+class Drive:
+    """An action family of Section 3.3 and the paper's settings for its robot."""
+    name: str
+    table1: str        # Table 1 column: "T" (two wheels robot) or "F" (floating robot)
+    budget: int        # Section 3.6: agent steps of learning per run
+    avoidance: str     # Section 3.4's intrinsic behaviour, by equation ("eq8", "eq9-10")
+    modalities: tuple  # (observation key, eq 3 weight) pairs, in the agent's input order
+
+
+DRIVES = {
+    "two_wheel": Drive("two_wheel", table1="T", budget=30_000, avoidance="eq8",
+                       modalities=(("range", 1.0),)),
+    "floating": Drive("floating", table1="F", budget=100_000, avoidance="eq9-10",
+                      modalities=(("range", 0.7), ("velocity", 0.3))),
+}
+
+
+@dataclasses.dataclass(frozen=True)
+class Robot:
+    name: str
+    model: pathlib.Path           # the robot's MJCF file
+    drive: str                    # a key of DRIVES
+    timestep: float = None        # seconds; None keeps the room's 0.05
+    integrator: str = None        # None keeps the room's Euler
+    table1: str = None            # None: the drive's
+    budget: int = None
+    avoidance: str = None
+    modalities: tuple = None
+    description: str = ""
+
+    def __post_init__(self):
+        if self.drive not in DRIVES:
+            raise ValueError(f"unknown drive {self.drive!r}; valid: {', '.join(DRIVES)}")
+        d = DRIVES[self.drive]
+        for field in ("table1", "budget", "avoidance", "modalities"):
+            if getattr(self, field) is None:
+                object.__setattr__(self, field, getattr(d, field))
+        object.__setattr__(self, "model", pathlib.Path(self.model))
+
+
+ROBOTS = {r.name: r for r in (
+    Robot("two_wheel", MODEL_DIR / "two_wheel.xml", "two_wheel",
+          description="the paper's two-wheel robot as a planar base (slide x, y, hinge yaw)"),
+    Robot("floating", MODEL_DIR / "floating.xml", "floating",
+          description="the paper's floating robot as a planar puck (slide x, y)"),
+)}
+
+#: The paper's two robots, in the order its Section 3.6 reports them.
+PAPER_ROBOTS = ("two_wheel", "floating")
+
+
+def resolve(robot, drive=None):
+    """A Robot from a registered name, or from a path to an MJCF file with a drive.
+
+    A registered name with a drive is refused unless the drive is the robot's own."""
+    if robot in ROBOTS:
+        entry = ROBOTS[robot]
+        if drive is not None and drive != entry.drive:
+            raise ValueError(f"robot {robot!r} has the {entry.drive} drive, not {drive!r}")
+        return entry
+    path = pathlib.Path(robot)
+    if path.suffix.lower() != ".xml":
+        raise ValueError(f"unknown robot {robot!r}; valid: {', '.join(ROBOTS)}, "
+                         "or a path to a robot .xml file with --drive")
+    if not path.is_file():
+        raise ValueError(f"no robot file at {path}")
+    if drive is None:
+        raise ValueError(f"robot file {path} needs a drive: one of {', '.join(DRIVES)}")
+    if drive not in DRIVES:
+        raise ValueError(f"unknown drive {drive!r}; valid: {', '.join(DRIVES)}")
+    return Robot(str(path), path.resolve(), drive)
