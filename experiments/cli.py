@@ -1,4 +1,5 @@
-"""The `ebrl` command (also `python -m experiments`): run, report, render, bench, demo."""
+"""The `ebrl` command (also `python -m experiments`): robots, run, report, render, bench,
+check, sweep, demo."""
 import argparse
 import os
 import pathlib
@@ -107,6 +108,7 @@ def _override(text):
 
 
 def build_parser():
+    from tasks.robots import DRIVES
     p = _Parser(prog="ebrl", description=__doc__)
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
@@ -148,6 +150,16 @@ def build_parser():
                    help="default: every registered robot")
     b.add_argument("--steps", type=positive_int, default=2000, help="timed steps per block")
     b.add_argument("--blocks", type=positive_int, default=5, help="medians over this many blocks")
+
+    c = sub.add_parser("check", help="a robot's action accuracy and a random-action fuzz")
+    c.add_argument("--robot", type=robot_list, default=robot_list("all"),
+                   help="default: every registered robot")
+    c.add_argument("--drive", type=_choice(tuple(DRIVES)), default=None,
+                   help="the drive of a robot given as a file")
+    c.add_argument("--actions", type=positive_int, default=100_000,
+                   help="random actions of the fuzz (default: %(default)s)")
+    c.add_argument("--accuracy-actions", type=positive_int, default=1000,
+                   help="free-space actions of the accuracy check (default: %(default)s)")
 
     w = sub.add_parser("sweep", help="the protocol at several values of one agent parameter")
     w.add_argument("--param", default="policy_threshold")
@@ -243,6 +255,15 @@ def cmd_render(args):
     return 0
 
 
+def cmd_check(args):
+    from experiments import robotcheck
+    try:
+        _check_robots(args)
+    except ValueError as e:
+        return _fail(str(e))
+    return robotcheck.main(args.robot, args.actions, args.accuracy_actions, args.drive)
+
+
 def cmd_bench(args):
     from experiments import bench
     bench.main(args.steps, args.blocks, args.robot)
@@ -319,7 +340,7 @@ def main(argv=None):
     args = build_parser().parse_args(argv)
     try:
         return {"robots": cmd_robots, "run": cmd_run, "report": cmd_report, "render": cmd_render,
-                "bench": cmd_bench, "sweep": cmd_sweep, "demo": cmd_demo}[args.command](args)
+                "bench": cmd_bench, "check": cmd_check, "sweep": cmd_sweep, "demo": cmd_demo}[args.command](args)
     except KeyboardInterrupt:
         print("ebrl: interrupted; finished runs are kept, rerun to resume", file=sys.stderr)
         return 130

@@ -60,6 +60,9 @@ def compose(robot_file, *, timestep=None, integrator=None):
         robot = mujoco.MjSpec.from_file(str(path))
     except ValueError as e:
         raise ValueError(f"{path} is not a MuJoCo model: {str(e).splitlines()[0]}") from None
+    # The robot file's own <option> is not attached (tasks.robots.file_options reads its
+    # timestep and integrator); aligned here so that attaching has no conflict to warn of.
+    robot.option.timestep, robot.option.integrator = room.option.timestep, room.option.integrator
     room.attach(robot, prefix=PREFIX, frame=room.worldbody.add_frame())
     if timestep is not None:
         room.option.timestep = float(timestep)

@@ -66,6 +66,7 @@ def load(robot, *, drive=None, seed=None, sensor_noise=navigation.SENSOR_NOISE,
     except navigation.ContractError as e:
         raise navigation.ContractError(f"robot file {entry.model}: {e}") from None
     task = task_cls(sensor_noise=sensor_noise, action_noise=action_noise,
-                    start_jitter=start_jitter, random=np.random.RandomState(seed))
-    return Environment(physics, task, n_sub_steps=n_sub_steps(physics.timestep),
+                    start_jitter=start_jitter, time_scale=entry.time_scale,
+                    random=np.random.RandomState(seed))
+    return Environment(physics, task, n_sub_steps=n_sub_steps(physics.timestep, entry.time_scale),
                        time_limit=float("inf"))

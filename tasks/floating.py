@@ -46,7 +46,7 @@ class Floating(navigation.Navigation):
     action_dim = 2
 
     def initialize_episode(self, physics):
-        physics.step_seconds = substeps(physics.timestep) * physics.timestep
+        physics.step_seconds = substeps(physics.timestep, self.time_scale) * physics.timestep
         super().initialize_episode(physics)
 
     def get_observation(self, physics):
@@ -63,11 +63,11 @@ class Floating(navigation.Navigation):
         # The environment then coasts for the other substeps.
 
 
-def substeps(timestep):
+def substeps(timestep, time_scale=1.0):
     """Substeps per agent step."""
-    return max(1, round(STEP_SECONDS / timestep))
+    return max(2, round(STEP_SECONDS * time_scale / timestep))
 
 
-def move_substeps(timestep):
+def move_substeps(timestep, time_scale=1.0):
     """Substeps the environment runs per agent step: the coast after the thrust."""
-    return substeps(timestep) - 1
+    return substeps(timestep, time_scale) - 1

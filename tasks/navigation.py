@@ -223,8 +223,10 @@ class Navigation(base.Task):
     action_dim = 1
 
     def __init__(self, *, sensor_noise=SENSOR_NOISE, action_noise=ACTION_NOISE,
-                 start_jitter=True, random=None):
+                 start_jitter=True, time_scale=1.0, random=None):
         super().__init__(random=random)
+        #: Seconds of an agent step over the drive's own (1 for the paper's robots).
+        self.time_scale = float(time_scale)
         self.sensor_noise = float(sensor_noise)
         self.action_noise = float(action_noise)
         self.start_jitter = bool(start_jitter)

@@ -3,8 +3,10 @@
 A robot is an MJCF file plus the paper's settings that go with its drive (the action
 family of Section 3.3). The drive gives the defaults: its Table 1 column (memory
 size), its Section 3.6 step budget, its intrinsic behaviour (Section 3.4) and its
-sensor modalities with eq 3's weights; an entry may override any of them, and may set
-its own timestep and integrator (the room's are the planar robots': 0.05 s, Euler).
+sensor modalities with eq 3's weights; an entry may override any of them, may set
+its own timestep and integrator (the room's are the planar robots': 0.05 s, Euler),
+and may stretch the seconds an agent step takes (`time_scale`: a real robot
+accelerates more gently than the paper's ideal one).
 
 Every command, figure and table takes its robots from `ROBOTS`; `resolve` also
 accepts a path to a robot file of the user's, with a drive. This module imports
@@ -41,6 +43,7 @@ class Robot:
     drive: str                    # a key of DRIVES
     timestep: float = None        # seconds; None keeps the room's 0.05
     integrator: str = None        # None keeps the room's Euler
+    time_scale: float = 1.0       # seconds of an agent step over the drive's (a slower robot)
     table1: str = None            # None: the drive's
     budget: int = None
     avoidance: str = None
@@ -62,6 +65,12 @@ ROBOTS = {r.name: r for r in (
           description="the paper's two-wheel robot as a planar base (slide x, y, hinge yaw)"),
     Robot("floating", MODEL_DIR / "floating.xml", "floating",
           description="the paper's floating robot as a planar puck (slide x, y)"),
+    Robot("diff_drive", MODEL_DIR / "diff_drive.xml", "two_wheel", timestep=0.02,
+          integrator="implicitfast", time_scale=2.5,
+          description="a 3D differential-drive robot: free chassis, two wheels, casters"),
+    Robot("hovercraft", MODEL_DIR / "hovercraft.xml", "floating", timestep=0.05,
+          integrator="implicitfast",
+          description="a 3D hovercraft on a free joint, gliding on skids under gravity"),
 )}
 
 #: The paper's two robots, in the order its Section 3.6 reports them.
@@ -87,4 +96,27 @@ def resolve(robot, drive=None):
         raise ValueError(f"robot file {path} needs a drive: one of {', '.join(DRIVES)}")
     if drive not in DRIVES:
         raise ValueError(f"unknown drive {drive!r}; valid: {', '.join(DRIVES)}")
-    return Robot(str(path), path.resolve(), drive)
+    return Robot(str(path), path.resolve(), drive, **file_options(path))
+
+
+def file_options(path):
+    """The timestep and integrator of a robot file's own <option>, if it gives them (a
+    robot file run as a file brings its own; a registered one has them in its entry)."""
+    import xml.etree.ElementTree as ElementTree
+    try:
+        option = ElementTree.parse(path).getroot().find("option")
+    except ElementTree.ParseError as e:
+        raise ValueError(f"{path} is not an XML file: {e}") from None
+    if option is None:
+        return {}
+    out = {}
+    if "timestep" in option.attrib:
+        try:
+            out["timestep"] = float(option.attrib["timestep"])
+        except ValueError:
+            raise ValueError(f"{path}: bad <option timestep={option.attrib['timestep']!r}>") from None
+        if not out["timestep"] > 0:
+            raise ValueError(f"{path}: <option timestep> must be positive")
+    if "integrator" in option.attrib:
+        out["integrator"] = option.attrib["integrator"]
+    return out

@@ -87,8 +87,8 @@ class TwoWheel(navigation.Navigation):
 
     def initialize_episode(self, physics):
         dt = physics.timestep
-        self._n_turn = substeps(TURN_SECONDS, dt)
-        self._n_move = substeps(MOVE_SECONDS, dt)
+        self._n_turn = substeps(TURN_SECONDS * self.time_scale, dt)
+        self._n_move = substeps(MOVE_SECONDS * self.time_scale, dt)
         physics.step_seconds = (self._n_turn + self._n_move) * dt
         super().initialize_episode(physics)
 
@@ -117,10 +117,75 @@ class TwoWheel(navigation.Navigation):
         super().after_step(physics)
 
 
-def move_substeps(timestep):
+def move_substeps(timestep, time_scale=1.0):
     """Substeps the environment runs per agent step: the move phase."""
-    return substeps(MOVE_SECONDS, timestep)
+    return substeps(MOVE_SECONDS * time_scale, timestep)
 
 
-class WheelPhysics(Physics):
-    """Placeholder."""
+class WheelPhysics(navigation.Physics):
+    """Two wheel hinges, ``left_wheel`` and ``right_wheel``, each under an
+    integrated-velocity servo: the control is the wheel's speed, the servo's target
+    angle integrates it and a PD loop on the wheel's angle follows. A phase of n
+    substeps sets the speeds that turn the wheels by the phase's angle in its first
+    RAMP share of the substeps; the rest lets the wheels settle on their targets. No
+    Python runs between phase boundaries."""
+
+    #: Share of a phase over which the wheel targets move; the rest is for settling.
+    RAMP = 0.5
+
+    def _reload_from_data(self, data):
+        super()._reload_from_data(data)
+        m = self.model
+        ids = [navigation._id(m, navigation.mujoco.mjtObj.mjOBJ_ACTUATOR, name)
+               for name in ("left_wheel", "right_wheel")]
+        if min(ids) < 0:
+            raise navigation.ContractError(
+                "the two_wheel drive needs actuators 'forward' and 'turn' (a planar base) "
+                "or 'left_wheel' and 'right_wheel' (wheels)")
+        joints = [int(m.actuator_trnid[i, 0]) for i in ids]
+        bodies = [int(m.jnt_bodyid[j]) for j in joints]
+        geoms = [int(np.flatnonzero(m.geom_bodyid == b)[0]) for b in bodies]
+        self._wheel_ctrl = ids
+        self._wheel_act = [int(m.actuator_actadr[i]) for i in ids]
+        self._wheel_qpos = [int(m.jnt_qposadr[j]) for j in joints]
+        #: Wheel radius (m) and half the track, the wheels' distance apart / 2 (m).
+        self.wheel_radius = float(m.geom_size[geoms[0], 0])
+        self.half_track = float(abs(m.body_pos[bodies[0], 1] - m.body_pos[bodies[1], 1]) / 2)
+
+    def _wheel_speeds(self, left, right, n):
+        """Turns the wheels by (left, right) rad over the ramp of an n-substep phase."""
+        ramp = max(1, round(self.RAMP * n))
+        self._ramp_left = ramp
+        ctrl = self._ctrl
+        ctrl[self._wheel_ctrl[0]] = left / (ramp * self.timestep)
+        ctrl[self._wheel_ctrl[1]] = right / (ramp * self.timestep)
+
+    def begin_turn(self, angle, n):
+        """Turns by `angle` rad (counter-clockwise) over an n-substep phase."""
+        w = angle * self.half_track / self.wheel_radius
+        self._wheel_speeds(-w, w, n)
+
+    def begin_move(self, distance, n):
+        """Moves `distance` units forward over an n-substep phase."""
+        w = distance * UNIT / self.wheel_radius
+        self._wheel_speeds(w, w, n)
+
+    def step(self, nstep=1):
+        """Steps through the phase: the ramp, then the wheels settle at rest targets."""
+        ramp = min(getattr(self, "_ramp_left", 0), nstep)
+        if ramp:
+            super().step(ramp)
+            self._ramp_left -= ramp
+            if not self._ramp_left:
+                self._ctrl[self._wheel_ctrl[0]] = self._ctrl[self._wheel_ctrl[1]] = 0.0
+            nstep -= ramp
+        if nstep:
+            super().step(nstep)
+
+    def halt(self):
+        """Stops the targets where the wheels are: a stalled wheel gives up the rest."""
+        ctrl, act, q = self._ctrl, self._act, self._qpos
+        for c, a, j in zip(self._wheel_ctrl, self._wheel_act, self._wheel_qpos):
+            ctrl[c] = 0.0
+            act[a] = q[j]
+        self._ramp_left = 0

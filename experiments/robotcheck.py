@@ -1,0 +1,150 @@
+"""`ebrl check`: does a robot do what its drive promises? For a newcomer's own robot
+file as much as for the registered ones.
+
+- `accuracy`: in free space, the achieved turn and move (two_wheel drive) or velocity
+  change (floating drive) against the noise-free command, over random actions.
+- `fuzz`: random actions that keep ramming walls, in episodes like the protocol's: the
+  robot never ends inside an obstacle (by more than it may sink), stays upright (tilt
+  under navigation.MAX_TILT_DEGREES), never gives NaN or a MuJoCo warning.
+"""
+import math
+import time
+
+import numpy as np
+
+#: A robot may sink into a wall by this much (units, a third of the paper robots' radius)
+#: at a fast contact, no more: the floating bumper's soft 0.2 s contact lets a puck
+#: that has built up speed sink about 0.45 units (docs/interpretation.md, floating bump).
+SINK_TOLERANCE = 0.5
+#: Section 3.3's 5% noise, as a share of the largest command, is the accuracy asked.
+ACCURACY = 0.05
+
+
+def clearance(layout, x, y):
+    """Distance (units) from (x, y) to the nearest wall or obstacle surface of the room
+    layout (models.room_layout); negative inside an obstacle."""
+    field, obstacles, _, _ = layout
+    x0, x1, y0, y1 = field
+    dists = [x - x0, x1 - x, y - y0, y1 - y]
+    for bx0, bx1, by0, by1 in obstacles:
+        if bx0 < x < bx1 and by0 < y < by1:
+            dists.append(-min(x - bx0, bx1 - x, y - by0, by1 - y))
+        else:
+            dists.append(math.hypot(max(bx0 - x, 0.0, x - bx1), max(by0 - y, 0.0, y - by1)))
+    return min(dists)
+
+
+def open_spot(layout):
+    """The point of the room farthest from every wall and obstacle (a 1-unit grid)."""
+    field = layout[0]
+    points = [(x, y) for x in np.arange(field[0], field[1] + 1e-9, 1.0)
+              for y in np.arange(field[2], field[3] + 1e-9, 1.0)]
+    return max(points, key=lambda p: clearance(layout, *p))
+
+
+def _quiet(robot, drive):
+    import tasks
+    env = tasks.load(robot, drive=drive, seed=0, sensor_noise=0.0, action_noise=0.0,
+                     start_jitter=False)
+    env.reset()
+    return env
+
+
+def accuracy(robot, actions=1000, seed=0, drive=None):
+    """Errors of random noise-free actions in free space: for the two_wheel drive,
+    |achieved - commanded| turn (rad) and move (units); for the floating drive, the
+    velocity change (units/step) on each axis. Returns the error arrays and limits."""
+    import models
+    import tasks
+    from tasks import floating, two_wheel
+    entry = tasks.resolve(robot, drive)
+    env = _quiet(entry, None)
+    physics = env.physics
+    x, y = open_spot(models.room_layout(physics.model))
+    rng = np.random.default_rng(seed)
+    errors = {}
+    try:
+        for _ in range(actions):
+            if entry.drive == "two_wheel":
+                physics.set_robot_pose(x, y, rng.uniform(-math.pi, math.pi))
+                a = rng.uniform(-1.0, 1.0)
+                x0, y0, h0 = physics.robot_pose()
+                env.step([a])
+                x1, y1, h1 = physics.robot_pose()
+                errors.setdefault("turn", []).append(
+                    math.remainder(h1 - h0, 2 * math.pi) + a * two_wheel.MAX_TURN)
+                errors.setdefault("move", []).append(
+                    math.hypot(x1 - x0, y1 - y0) - two_wheel.MAX_MOVE * (1.0 - abs(a)))
+            else:
+                physics.set_robot_pose(x, y, 0.0)
+                a = rng.uniform(-1.0, 1.0, 2)
+                env.step(a)
+                dv = physics.robot_velocity() - floating.MAX_ACCELERATION * a
+                errors.setdefault("velocity_x", []).append(dv[0])
+                errors.setdefault("velocity_y", []).append(dv[1])
+    finally:
+        env.close()
+    limits = ({"turn": ACCURACY * two_wheel.MAX_TURN, "move": ACCURACY * two_wheel.MAX_MOVE}
+              if entry.drive == "two_wheel" else
+              {k: ACCURACY * floating.MAX_ACCELERATION for k in ("velocity_x", "velocity_y")})
+    return {k: np.abs(v) for k, v in errors.items()}, limits
+
+
+def fuzz(robot, actions=100_000, seed=0, drive=None):
+    """Random actions biased to keep ramming walls, resetting at the goal; returns the
+    worst clearance (units), the largest tilt (degrees), NaN and warning counts, and the
+    seconds it took. PhysicsError (unstable, tipped over) propagates."""
+    import models
+    import tasks
+    entry = tasks.resolve(robot, drive)
+    env = tasks.load(entry, seed=seed)
+    physics = env.physics
+    layout = models.room_layout(physics.model)
+    data = physics.data.ptr
+    warnings_before = sum(w.number for w in data.warning)
+    rng = np.random.default_rng(seed)
+    dim = env.action_spec().shape[0]
+    bias = np.zeros(dim)
+    worst, tilt, nans = math.inf, 0.0, 0
+    started = time.perf_counter()
+    env.reset()
+    try:
+        for i in range(actions):
+            if i % 300 == 0:  # a new direction to ram, now and then
+                bias = rng.uniform(-0.6, 0.6, dim)
+            action = np.clip(rng.normal(0.0, 0.5, dim) + bias, -1.0, 1.0)
+            if env.step(action).last():
+                env.reset()
+            x, y, _ = physics.robot_pose()
+            worst = min(worst, clearance(layout, x, y) - physics.robot_radius)
+            tilt = max(tilt, physics.tilt())
+            nans += int(not np.isfinite(data.qpos).all())
+    finally:
+        warnings = sum(w.number for w in data.warning) - warnings_before
+        env.close()
+    return {"robot": entry.name, "actions": actions, "worst_clearance": worst,
+            "max_tilt_degrees": math.degrees(tilt), "nan_steps": nans, "warnings": warnings,
+            "seconds": time.perf_counter() - started}
+
+
+def main(robots, actions, accuracy_actions, drive=None):
+    """Prints both checks for each robot; returns 0 if every robot passes, else 1."""
+    from tasks import navigation
+    failed = 0
+    for robot in robots:
+        errors, limits = accuracy(robot, accuracy_actions, drive=drive)
+        for key, e in errors.items():
+            ok = e.max() <= limits[key]
+            failed += not ok
+            print(f"{robot}: {key} error over {len(e)} free-space actions: median {np.median(e):.4f}, "
+                  f"95% {np.percentile(e, 95):.4f}, max {e.max():.4f} (limit {limits[key]:.3f}) "
+                  f"{'ok' if ok else 'FAIL'}")
+        r = fuzz(robot, actions, drive=drive)
+        ok = (r["worst_clearance"] > -SINK_TOLERANCE and r["nan_steps"] == 0
+              and r["warnings"] == 0 and r["max_tilt_degrees"] < navigation.MAX_TILT_DEGREES)
+        failed += not ok
+        print(f"{robot}: {actions:,} random actions in {r['seconds']:.0f} s: deepest into a wall "
+              f"{max(0.0, -r['worst_clearance']):.3f} units (limit {SINK_TOLERANCE}), largest tilt "
+              f"{r['max_tilt_degrees']:.2f} degrees, NaN steps {r['nan_steps']}, MuJoCo warnings "
+              f"{r['warnings']} {'ok' if ok else 'FAIL'}")
+    return 1 if failed else 0

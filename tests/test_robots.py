@@ -1,0 +1,210 @@
+"""The robot registry, the naming contract and the 3D robots, in real MuJoCo and through
+the real command line."""
+import math
+import pathlib
+import re
+import subprocess
+import sys
+
+import mujoco
+import numpy as np
+import pytest
+
+import tasks
+from experiments import protocol, robotcheck, runner
+from tasks import navigation
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+MODELS = ROOT / "models"
+
+
+def ebrl(*args, cwd=ROOT):
+    return subprocess.run([sys.executable, "-m", "experiments", *map(str, args)], cwd=cwd,
+                          capture_output=True, text=True, timeout=600)
+
+
+def test_every_command_takes_its_robots_from_the_registry():
+    listed = ebrl("robots")
+    assert listed.returncode == 0
+    names = [line.split()[0] for line in listed.stdout.splitlines()[1:]]
+    assert names == list(tasks.ROBOTS) and {"diff_drive", "hovercraft"} <= set(names)
+    for command in (["run"], ["sweep"], ["bench"], ["check"],
+                    ["render", "--condition", "random", "--seed", "0", "--out", "x.mp4"]):
+        proc = ebrl(*command, "--robot", "tricycle")
+        assert proc.returncode == 2 and "tricycle" in proc.stderr, (command, proc.stderr)
+        if command[0] != "render":
+            assert "valid: " + ", ".join(tasks.ROBOTS) in proc.stderr, proc.stderr
+    budgets = {s.robot: s.steps for s in runner.plan(tuple(tasks.ROBOTS), ["random"], [0])}
+    assert budgets == {name: r.budget for name, r in tasks.ROBOTS.items()}
+
+
+@pytest.mark.parametrize("robot", list(tasks.ROBOTS))
+def test_pose_and_velocity_read_outs_for_slide_and_free_joints(robot):
+    env = tasks.load(robot, seed=0, start_jitter=False, sensor_noise=0.0, action_noise=0.0)
+    env.reset()
+    physics = env.physics
+    assert (physics._free is not None) == (robot in ("diff_drive", "hovercraft"))
+    heading = 0.7 if physics._qyaw is not None or physics._free is not None else 0.0
+    if robot == "hovercraft":
+        heading = 0.0  # its gyro holds the heading at 0
+    physics.set_robot_pose(41.5, 33.25, heading)
+    assert physics.robot_pose() == pytest.approx((41.5, 33.25, heading), abs=1e-9)
+    assert physics.tilt() == pytest.approx(0.0, abs=1e-9)
+    # The body velocity, in units per agent step, against the joints' own velocity.
+    v = np.array([0.3, -0.2])  # m/s
+    if physics._free is not None:
+        physics.data.qvel[physics._free - 0: physics._free + 2] = v  # free joint: dofs = qpos - 0
+    else:
+        physics.data.qvel[[physics.model.jnt_dofadr[physics.base_joints[k]] for k in "xy"]] = v
+    physics.forward()
+    np.testing.assert_allclose(physics.robot_velocity(), v * physics.step_seconds / 0.1,
+                               rtol=1e-12)
+    env.close()
+
+
+def test_sensors_once_per_step_read_as_sensors_every_substep():
+    """mjDSBL_SENSOR + one mj_sensorPos per agent step gives the observations of
+    MuJoCo's every-substep sensor stage, bit for bit."""
+    for robot in tasks.ROBOTS:
+        once, every = tasks.load(robot, seed=1), tasks.load(robot, seed=1)
+        every.physics._sensor_bit = 0  # toggles nothing: sensors on every substep
+        every.physics.model.ptr.opt.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
+        once.reset(), every.reset()
+        rng = np.random.default_rng(0)
+        for _ in range(40):
+            a = rng.uniform(-1, 1, once.action_spec().shape)
+            got, want = once.step(a).observation, every.step(a).observation
+            assert all(np.array_equal(got[k], want[k]) for k in want), robot
+        assert once.physics.model.ptr.opt.disableflags & int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
+        once.close(), every.close()
+
+
+def test_planar_trajectories_unchanged_by_the_registry():
+    """The first 3,000 steps of seeds 0-1, every paper robot and condition, as the run
+    behind RESULTS.md (protocol version 2) made them."""
+    with np.load(ROOT / "tests" / "data" / f"planar_traces_v{protocol.PROTOCOL_VERSION}.npz") as z:
+        expected = {k: z[k] for k in z.files}
+    for key, trace in expected.items():
+        robot, condition, seed = key.split("__")
+        spec = protocol.RunSpec(robot, condition, int(seed[5:]), len(trace) - 1)
+        got = protocol.execute(spec)["trace"]
+        assert np.array_equal(got, trace), key
+
+
+def _copy_robot(tmp_path, name, edit=None):
+    text = (MODELS / f"{name}.xml").read_text()
+    if edit:
+        text = edit(text)
+    path = tmp_path / "robots" / f"my_{name}.xml"
+    path.parent.mkdir(exist_ok=True)
+    path.write_text(text)
+    return path
+
+
+def test_a_robot_file_outside_the_package_loads_and_runs(tmp_path):
+    path = _copy_robot(tmp_path, "two_wheel")
+    ours, theirs = tasks.load(str(path), drive="two_wheel", seed=4), tasks.load("two_wheel", seed=4)
+    ours.reset(), theirs.reset()
+    for a in np.linspace(-1, 1, 25):
+        assert ours.step([a]).observation["range"].tolist() == theirs.step([a]).observation["range"].tolist()
+    assert ours.physics.robot_pose() == theirs.physics.robot_pose()
+    ours.close(), theirs.close()
+    out = tmp_path / "results"
+    proc = ebrl("run", "--robot", path, "--drive", "two_wheel", "--condition", "avoidance",
+                "--seeds", "0", "--steps", "200", "--workers", "1", "--no-progress", "--out", out)
+    assert proc.returncode == 0, proc.stderr
+    assert (out / "my_two_wheel" / "avoidance" / "seed_000" / "run.json").is_file()
+    assert "my_two_wheel" in (out / "REPORT.md").read_text()
+
+
+@pytest.mark.parametrize("robot,drive,edit,missing", [
+    ("two_wheel", "two_wheel", lambda t: re.sub(r"<sensor>.*</sensor>", "", t, flags=re.S),
+     "no rangefinder sensors"),
+    ("two_wheel", "two_wheel", lambda t: t.replace('name="base"', 'name="chassis"'),
+     "no body named 'base'"),
+    ("two_wheel", "two_wheel", lambda t: t.replace('name="hull"', 'name="bumper"'),
+     "no geom named 'hull'"),
+    ("two_wheel", "two_wheel", lambda t: t.replace('name="forward"', 'name="ahead"'),
+     "needs actuators 'forward' and 'turn'"),
+    ("floating", "floating", lambda t: t.replace('name="thrust_y"', 'name="jet"'),
+     "needs actuators 'thrust_x' and 'thrust_y'"),
+    ("two_wheel", "floating", None, "needs actuators 'thrust_x' and 'thrust_y'"),
+    ("floating", "floating", lambda t: re.sub(r'<rangefinder name="range_7"[^>]*>', "", t),
+     "needs 8 rangefinders"),
+])
+def test_a_missing_part_is_one_line_naming_it(tmp_path, robot, drive, edit, missing):
+    path = _copy_robot(tmp_path, robot, edit)
+    with pytest.raises(navigation.ContractError, match=re.escape(missing)):
+        tasks.load(str(path), drive=drive)
+    out = tmp_path / "out"
+    proc = ebrl("run", "--robot", path, "--drive", drive, "--out", out)
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and len(lines) == 1 and missing in lines[0], proc.stderr
+    assert str(path) in lines[0] and not out.exists()
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--robot", "models/two_wheel.xml"], "needs a drive"),
+    (["--robot", "no/such/robot.xml", "--drive", "two_wheel"], "no robot file"),
+    (["--robot", "two_wheel", "--drive", "floating"], "has the two_wheel drive"),
+])
+def test_robot_file_arguments_are_checked(tmp_path, args, message):
+    proc = ebrl("run", *args, "--out", tmp_path / "out", cwd=ROOT)
+    assert proc.returncode == 2 and message in proc.stderr and not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("robot", ["diff_drive", "hovercraft"])
+def test_3d_robot_free_space_actions_within_five_percent(robot):
+    errors, limits = robotcheck.accuracy(robot, actions=60)
+    for key, e in errors.items():
+        assert e.max() <= limits[key], (key, e.max())
+
+
+@pytest.mark.parametrize("robot", ["diff_drive", "hovercraft"])
+def test_3d_robot_random_action_fuzz(robot):
+    """The fuzz of `ebrl check` with 1,500 actions (all 100,000: `ebrl check`)."""
+    r = robotcheck.fuzz(robot, actions=1500, seed=2)
+    assert r["worst_clearance"] > -robotcheck.SINK_TOLERANCE
+    assert r["max_tilt_degrees"] < navigation.MAX_TILT_DEGREES
+    assert r["nan_steps"] == 0 and r["warnings"] == 0
+
+
+@pytest.mark.parametrize("robot", ["diff_drive", "hovercraft"])
+def test_3d_robot_same_seed_same_trajectory(robot):
+    runs = []
+    for _ in range(2):
+        env = tasks.load(robot, seed=11)
+        env.reset()
+        rng = np.random.default_rng(5)
+        poses = []
+        for _ in range(150):
+            env.step(rng.uniform(-1, 1, env.action_spec().shape))
+            poses.append(env.physics.robot_pose())
+        env.close()
+        runs.append(poses)
+    assert runs[0] == runs[1]
+
+
+def test_a_tipped_robot_raises():
+    env = tasks.load("diff_drive", seed=0)
+    env.reset()
+    physics = env.physics
+    q = physics.data.qpos
+    q[3:7] = [math.cos(0.3), math.sin(0.3), 0.0, 0.0]  # rolled 34 degrees
+    q[2] = 0.3
+    physics.forward()
+    from dm_control.rl import control
+    with pytest.raises(control.PhysicsError, match="tipped over"):
+        physics.step(1)
+    env.close()
+
+
+def test_room_layout_is_read_from_the_composed_model():
+    import models
+    env = tasks.load("diff_drive", seed=0)
+    field, obstacles, goal, start = models.room_layout(env.physics.model)
+    env.close()
+    assert field == pytest.approx((0, 90, 0, 60)) and goal == pytest.approx((80, 90, 50, 60))
+    np.testing.assert_allclose(sorted(obstacles), [(20, 30, 20, 50), (50, 60, 10, 20),
+                                                   (70, 80, 30, 60)], atol=1e-9)
+    assert start == pytest.approx((5, 35, 0))
