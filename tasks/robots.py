@@ -68,7 +68,7 @@ ROBOTS = {r.name: r for r in (
     Robot("diff_drive", MODEL_DIR / "diff_drive.xml", "two_wheel", timestep=0.02,
           integrator="implicitfast", time_scale=2.5,
           description="a 3D differential-drive robot: free chassis, two wheels, casters"),
-    Robot("hovercraft", MODEL_DIR / "hovercraft.xml", "floating", timestep=0.05,
+    Robot("hovercraft", MODEL_DIR / "hovercraft.xml", "floating", timestep=0.025,
           integrator="implicitfast",
           description="a 3D hovercraft on a free joint, gliding on skids under gravity"),
 )}
