@@ -34,6 +34,11 @@ class Physics(navigation.Physics):
                 "the floating drive needs 8 rangefinders (E, NE, N, NW, W, SW, S, SE; eq 10)")
         self._mass = float(m.body_subtreemass[self._base])
 
+    def set_robot_pose(self, x, y, heading=0.0):
+        """Places the robot at (x, y), at rest, heading 0 whatever is asked: a floating
+        robot's beams point along the world's axes (E, NE, N, ...)."""
+        super().set_robot_pose(x, y, 0.0)
+
     def thrust(self, dvx, dvy):
         """Sets the thrust that changes the velocity by (dvx, dvy) units/step in one substep."""
         scale = UNIT / self.step_seconds * self._mass / self.timestep

@@ -1,0 +1,106 @@
+"""Gymnasium environments for every registered robot, one id each, registered in one loop.
+
+    import gymnasium, tasks.gym
+    env = gymnasium.make("EBRL/TwoWheel-v0", render_mode="rgb_array")   # or DiffDrive, ...
+    obs, info = env.reset(seed=0)
+    obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+
+`gymnasium.make("tasks.gym:EBRL/TwoWheel-v0")` imports this module itself. Options of
+`tasks.load` pass through: `sensor_noise`, `action_noise`, `start_jitter`; and
+`max_episode_steps` (default: the robot's budget of Section 3.6).
+
+A thin adapter of our dm_env tasks rather than Shimmy's dm_control converter: reset(seed)
+must reseed the task's own random stream (start jitter, sensor and action noise) to
+reproduce a trajectory, and Shimmy's converter writes a wrong render_fps into the class
+metadata. Reaching the goal is `terminated`; the step limit (Gymnasium's TimeLimit) is
+`truncated`, never `terminated`.
+"""
+import gymnasium
+import numpy as np
+from gymnasium import spaces
+
+from tasks.robots import ROBOTS
+
+NAMESPACE = "EBRL"
+VERSION = 0
+RENDER_SIZE = (320, 480)  # height, width of render_mode="rgb_array"
+
+
+def env_id(robot):
+    """'two_wheel' -> 'EBRL/TwoWheel-v0'."""
+    return f"{NAMESPACE}/{''.join(p.capitalize() for p in robot.split('_'))}-v{VERSION}"
+
+
+def _space(spec):
+    """A Box matching a dm_env spec (an Array is unbounded, a BoundedArray is bounded)."""
+    low = getattr(spec, "minimum", -np.inf)
+    high = getattr(spec, "maximum", np.inf)
+    return spaces.Box(np.broadcast_to(low, spec.shape).astype(spec.dtype),
+                      np.broadcast_to(high, spec.shape).astype(spec.dtype), spec.shape, spec.dtype)
+
+
+class NavigationEnv(gymnasium.Env):
+    """One robot's navigation task (tasks.load) as a Gymnasium environment."""
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": None}  # set per instance
+
+    def __init__(self, robot, *, render_mode=None, sensor_noise=None, action_noise=None,
+                 start_jitter=True, drive=None):
+        import tasks
+        from tasks import navigation
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        self.robot = robot
+        self._env = tasks.load(
+            robot, drive=drive, seed=0, start_jitter=start_jitter,
+            sensor_noise=navigation.SENSOR_NOISE if sensor_noise is None else sensor_noise,
+            action_noise=navigation.ACTION_NOISE if action_noise is None else action_noise)
+        self.render_mode = render_mode
+        self.observation_space = spaces.Dict(
+            {k: _space(s) for k, s in self._env.observation_spec().items()})
+        self.action_space = _space(self._env.action_spec())
+        self._env.reset()
+        self.metadata = dict(self.metadata,
+                             render_fps=1.0 / self._env.physics.step_seconds)
+
+    @property
+    def physics(self):
+        return self._env.physics
+
+    def _info(self):
+        x, y, heading = self._env.physics.robot_pose()
+        return {"pose": np.array([x, y, heading]), "is_success": self._env.physics.in_goal()}
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        if seed is not None:  # the task's own stream: start jitter, sensor and action noise
+            self._env.task._random = np.random.RandomState(seed)
+        ts = self._env.reset()
+        return dict(ts.observation), self._info()
+
+    def step(self, action):
+        ts = self._env.step(action)
+        terminated = ts.last() and ts.discount == 0.0
+        return dict(ts.observation), float(ts.reward), terminated, False, self._info()
+
+    def render(self):
+        if self.render_mode != "rgb_array":
+            return None
+        height, width = RENDER_SIZE
+        return self._env.physics.render(height=height, width=width, camera_id="top")
+
+    def close(self):
+        if self._env is not None:
+            self._env.close()
+            self._env = None
+
+
+def register_all():
+    """Registers one id per robot of the registry (idempotent)."""
+    for name, robot in ROBOTS.items():
+        if env_id(name) not in gymnasium.registry:
+            gymnasium.register(env_id(name), entry_point=NavigationEnv,
+                               max_episode_steps=robot.budget, kwargs={"robot": name})
+
+
+register_all()
