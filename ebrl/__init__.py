@@ -1,4 +1,46 @@
-"""Episode-based reinforcement learning (Unemi 2000), standalone numpy."""
+"""Episode-based reinforcement learning (Unemi 2000): numpy, with the agent's per-step
+work compiled by numba (ebrl.kernels). ebrl never imports the simulator.
+
+Paper equation -> the function that computes it -> the tests that check it against a
+case computed by hand (in tests/test_ebrl_equations.py unless named otherwise):
+
+eq 1      W += alpha (S - W)          kernels.eq1 (also agent.eq1), applied by kernels.recall
+          test_eq1_recall_weight_moves_alpha_of_the_way, test_recall_eq1_by_hand
+2.2       recall table: the N_r       kernels.recall
+          largest weights             test_recall_eq1_by_hand; test_ebrl_memory.py:
+                                      test_recall_selection_is_the_stable_top_n_r
+eq 2      S = 1 - sqrt(sum ... / 2n)  kernels.similarities (the agent's); ebrl.similarity
+                                      (the float64 reference, as printed)
+          test_eq2_by_hand[reference], test_eq2_by_hand[compiled],
+          test_compiled_similarity_equals_float64_reference,
+          test_agent_similarity_equals_reference
+eq 3-4    weighted modalities         the same two functions
+          test_eq3_eq4_weighted_modalities_by_hand[reference], [compiled]
+eq 2 V_i  variance of the memory      kernels.update_variance (running sums, floored)
+          test_ebrl_memory.py: test_invariants_under_random_episodes,
+          test_forgetting_takes_the_least_reliable_and_splices_links
+eq 5      max_i min(W_i, U_i)         kernels.eq5 (also agent.eq5), kernels.policy
+          test_eq5_measure_is_min_of_weight_and_utility, test_eq5_policy_by_hand,
+          test_policy_threshold_and_empty_table_use_the_fallback
+eq 6      U_j += r gamma^(t - t_j)    kernels.eq6
+          test_eq6_utilities_discount_along_the_episode_and_stop_at_cutoff,
+          test_eq6_exponent_is_elapsed_time_across_a_spliced_gap
+eq 7      R += rho r (1 - R) / rho r R  kernels.eq7
+          test_eq7_reliability_along_backward_links_both_signs
+2.1       time discount R *= 0.99     kernels.time_discount
+          test_eq7_reliability_along_backward_links_both_signs (the decays by hand)
+2.1       forgetting the least        kernels.least_reliable, kernels.forget
+          reliable element            test_ebrl_memory.py:
+                                      test_forgetting_takes_the_least_reliable_and_splices_links,
+                                      test_forgetting_takes_the_first_of_equal_reliabilities
+eq 8      avoidance by turning        intrinsic.avoid_by_turning ("eq8")
+          test_eq8_two_wheel_avoidance_by_hand
+eq 9-10   avoidance by accelerating   intrinsic.avoid_by_accelerating ("eq9-10")
+          test_eq9_eq10_floating_avoidance_by_hand
+
+kernels.act and kernels.learn chain these for one step; ebrl.Agent holds the memory and
+calls them, once each per step.
+"""
 from ebrl import intrinsic
 from ebrl.agent import Agent
 from ebrl.config import Config, paper_config

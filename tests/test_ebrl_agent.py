@@ -88,3 +88,51 @@ def test_ebrl_never_imports_the_simulator():
     code = "import sys, ebrl, ebrl.benchmark; print(any(m.split('.')[0] in ('mujoco', 'dm_control', 'tasks') for m in sys.modules))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+def _run(seed, steps=3000):
+    """A floating-like agent (eq 3's groups) on a fixed random stream; its whole state."""
+    rng = np.random.default_rng(seed + 7)
+    ag = ebrl.Agent(ebrl.Config(memory_size=256), 10, 2, intrinsic.fallback_for("eq9-10", "avoidance"),
+                    groups=[np.arange(8), np.arange(8, 10)], group_weights=[0.7, 0.3], seed=seed)
+    actions = []
+    for step in range(steps):
+        obs = rng.random(10)
+        actions.append(ag.act(obs, readings=obs[:8]))
+        last = step % 150 == 149
+        ag.learn(1.0 if last else -0.1 if step % 40 == 0 else 0.0, last)
+    return np.array(actions), ag
+
+
+def test_same_seed_same_state_bit_for_bit():
+    (a1, ag1), (a2, ag2) = _run(3), _run(3)
+    assert np.array_equal(a1, a2)
+    for name in ("_inputs", "_action", "_utility", "_rel", "_time", "_next", "_prev", "_sums",
+                 "_var", "_table", "_table_w"):
+        assert np.array_equal(getattr(ag1, name), getattr(ag2, name)), name
+    assert ag1.memory_decisions == ag2.memory_decisions > 0
+
+
+def test_kernels_are_compiled_once_and_cached():
+    """Every kernel carries cache=True, and a new process loads them from numba's cache
+    instead of compiling: the second of two fresh processes compiles nothing."""
+    import subprocess
+    import sys
+    from ebrl import kernels
+    dispatchers = [v for v in vars(kernels).values() if hasattr(v, "py_func")]
+    assert len(dispatchers) >= 10
+    for d in dispatchers:
+        assert type(d._cache).__name__ == "FunctionCache", d.__name__
+        assert not d.targetoptions.get("fastmath") and not d.targetoptions.get("parallel")
+    code = ("import numpy as np, ebrl\n"
+            "from ebrl import kernels\n"
+            "ag = ebrl.Agent(ebrl.Config(memory_size=8, recall_size=2), 3, 1,\n"
+            "                ebrl.intrinsic.RandomWalk(1), seed=0)\n"
+            "for t in range(20):\n"
+            "    ag.act(np.random.default_rng(t).random(3)); ag.learn(float(t % 5 == 4), t % 5 == 4)\n"
+            "ds = [v for v in vars(kernels).values() if hasattr(v, 'py_func')]\n"
+            "print(sum(len(d.stats.cache_misses) for d in ds), sum(len(d.stats.cache_hits) for d in ds))\n")
+    for _ in range(2):
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    misses, hits = map(int, out.stdout.split())
+    assert misses == 0 and hits > 0, out.stdout

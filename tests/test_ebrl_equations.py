@@ -6,7 +6,7 @@ import pytest
 
 import ebrl
 from ebrl import agent as agent_mod
-from ebrl import intrinsic
+from ebrl import intrinsic, kernels
 
 
 def test_eq1_recall_weight_moves_alpha_of_the_way():
@@ -15,39 +15,111 @@ def test_eq1_recall_weight_moves_alpha_of_the_way():
     assert agent_mod.eq1(0.9, 0.1, 0.25) == pytest.approx(0.7)
 
 
-def test_eq2_by_hand():
+def _compiled_similarity(x, memory, variance, groups=None, weights=None):
+    """ebrl.kernels.similarities (what the agent runs) with ebrl.similarity's arguments."""
+    x = np.asarray(x, dtype=np.float64)
+    memory = np.atleast_2d(np.asarray(memory, dtype=np.float64))
+    if groups is None:
+        groups, weights = [np.arange(len(x))], [1.0]
+    group_of = np.zeros(len(x), dtype=np.int64)
+    for j, idx in enumerate(groups):
+        group_of[np.asarray(idx)] = j
+    w = np.asarray(weights, dtype=np.float64)
+    out = np.zeros(len(memory))
+    kernels.similarities(x, np.ascontiguousarray(memory.T), len(memory),
+                         np.asarray(variance, dtype=np.float64), group_of,
+                         np.array([len(g) for g in groups], dtype=np.float64), w / w.sum(), out)
+    return out
+
+
+BOTH = pytest.mark.parametrize("similarity", [ebrl.similarity, _compiled_similarity],
+                               ids=["reference", "compiled"])
+
+
+@BOTH
+def test_eq2_by_hand(similarity):
     # x = (1, 2), y = (0, 4), V = (1, 4): sum (1/1 + 4/4) = 2, 1/(2n) = 1/4 -> 1 - sqrt(0.5)
-    s = ebrl.similarity([1.0, 2.0], [[0.0, 4.0], [1.0, 2.0]], [1.0, 4.0])
+    s = similarity([1.0, 2.0], [[0.0, 4.0], [1.0, 2.0]], [1.0, 4.0])
     assert s[0] == pytest.approx(1 - math.sqrt(0.5))
     assert s[1] == pytest.approx(1.0)
 
 
-def test_eq3_eq4_weighted_modalities_by_hand():
+@BOTH
+def test_eq3_eq4_weighted_modalities_by_hand(similarity):
     x = np.array([0.0, 0.0, 1.0])
     y = np.array([[1.0, 1.0, 3.0]])
     v = np.array([1.0, 1.0, 2.0])
     # group A = (0, 1): sum = 2, n = 2 -> S'_A = 1 - sqrt(2/4) ; group B = (2): (2^2)/2 = 2, n = 1 -> 1 - sqrt(1)
     s_a, s_b = 1 - math.sqrt(0.5), 0.0
-    s = ebrl.similarity(x, y, v, groups=[[0, 1], [2]], weights=[0.7, 0.3])
+    s = similarity(x, y, v, groups=[[0, 1], [2]], weights=[0.7, 0.3])
     assert s[0] == pytest.approx((0.7 * s_a + 0.3 * s_b) / 1.0)
+    # Weights need not sum to 1: eq 3 divides by their sum.
+    s = similarity(x, y, v, groups=[[0, 1], [2]], weights=[1.4, 0.6])
+    assert s[0] == pytest.approx(0.7 * s_a + 0.3 * s_b)
 
 
-def test_fast_similarity_equals_reference():
+@pytest.mark.parametrize("groups,weights", [
+    (None, None), ([np.arange(8), np.arange(8, 10)], [0.7, 0.3]),
+    ([[0, 5, 9], [1, 2], [3, 4, 6, 7, 8]], [2.0, 0.5, 1.0]),  # interleaved groups
+])
+def test_compiled_similarity_equals_float64_reference(groups, weights):
     rng = np.random.default_rng(0)
+    for trial in range(20):
+        memory = rng.random((257, 10)) * 10.0 ** rng.uniform(-3, 3, 10)  # mixed scales
+        x = memory[rng.integers(257)] if trial % 4 == 0 else rng.random(10)  # exact matches too
+        variance = np.maximum(memory.var(axis=0), 1e-6)
+        want = ebrl.similarity(x, memory, variance, groups, weights)
+        np.testing.assert_allclose(_compiled_similarity(x, memory, variance, groups, weights),
+                                   want, rtol=0, atol=1e-12)
+
+
+def test_agent_similarity_equals_reference():
+    rng = np.random.default_rng(0)
+    groups = [np.arange(8), np.arange(8, 10)]
     ag = ebrl.Agent(ebrl.Config(memory_size=64), 10, 2, intrinsic.RandomWalk(2),
-                    groups=[np.arange(8), np.arange(8, 10)], group_weights=[0.7, 0.3], seed=0)
-    for _ in range(100):
-        ag.act(rng.random(10))
+                    groups=groups, group_weights=[0.7, 0.3], seed=0)
+    fed = rng.random((100, 10))
+    for x in fed:
+        ag.act(x)
         ag.learn(0.0)
     x = rng.random(10)
-    stored = ag._x[: ag.size]
-    want = ebrl.similarity(x, stored, ag.variance, [np.arange(8), np.arange(8, 10)], [0.7, 0.3])
-    np.testing.assert_allclose(ag._similarities(x), want, atol=1e-4)
+    stored = ag._inputs[:, : ag.size].T
+    want = ebrl.similarity(x, stored, ag.variance, groups, [0.7, 0.3])
+    np.testing.assert_allclose(ag._similarities(x), want, rtol=0, atol=1e-12)
+
+
+def test_recall_eq1_by_hand():
+    """eq 1 on the entries that move along their forward links, then the N_r largest."""
+    nxt = np.array([1, -1, 3, -1, -1])
+    table, table_w = np.array([0, 1, 2]), np.array([0.9, 0.8, 0.2])
+    sim = np.array([0.3, 0.1, 0.0, 0.6, 0.25])
+    kernels.recall(sim, 5, nxt, table, table_w, 0.5)
+    # entry 0 (W 0.9) -> element 1 (S 0.1): 0.9 + 0.5 (0.1 - 0.9) = 0.5;
+    # entry 1 is at its episode's end: dropped (element 1 stays a candidate via entry 0);
+    # entry 2 (W 0.2) -> element 3 (S 0.6): 0.4 < 0.6, the similarity is kept.
+    # Candidates: 0.3, 0.5, 0.0, 0.6, 0.25 -> the 3 largest: 3, 1, 0.
+    np.testing.assert_array_equal(table, [3, 1, 0])
+    np.testing.assert_allclose(table_w, [0.6, 0.5, 0.3])
+    # Fewer stored elements than entries: the rest stay empty (-1).
+    table = np.full(3, -1)
+    kernels.recall(np.array([0.2, 0.7]), 2, np.array([-1, -1]), table, np.zeros(3), 0.5)
+    np.testing.assert_array_equal(table, [1, 0, -1])
 
 
 def test_eq5_measure_is_min_of_weight_and_utility():
     np.testing.assert_allclose(agent_mod.eq5(np.array([0.9, 0.3, 0.5]), np.array([0.1, 0.8, 0.6])),
                                [0.1, 0.3, 0.5])
+    assert agent_mod.eq5(0.4, 0.7) == 0.4
+
+
+def test_eq5_policy_by_hand():
+    utility = np.array([0.5, 0.9, 0.5, 0.0, 0.45])
+    table, table_w = np.array([3, 0, 2, 4, 1]), np.array([0.9, 0.6, 0.6, 0.5, 0.4])
+    # measures: min(0.9, 0) = 0, min(0.6, 0.5) = 0.5, 0.5, 0.45, 0.4: entries 1 and 2 tie
+    # at 0.5 with equal weights; the first in table order (element 0) wins.
+    assert kernels.policy(table, table_w, utility, 0.0) == 0
+    assert kernels.policy(table, table_w, utility, 0.5) == -1  # must exceed the threshold
+    assert kernels.policy(np.full(5, -1), table_w, utility, -1.0) == -1  # empty table
 
 
 def _agent(**kw):
@@ -61,6 +133,16 @@ def test_eq6_utilities_discount_along_the_episode_and_stop_at_cutoff():
         ag.learn(1.0 if t == 3 else 0.0, last=t == 3)
     # newest 1, then 0.5, 0.25; 0.125 < cutoff 0.2 stays 0
     np.testing.assert_allclose(ag.utility, [0.0, 0.25, 0.5, 1.0])
+
+
+def test_eq6_exponent_is_elapsed_time_across_a_spliced_gap():
+    # Episode 0 -> 1 -> 2 stored at steps 0, 1, 5; element 1 forgotten (spliced): 2 -> 0.
+    # r = 2, gamma = 0.5, cutoff 0.01: U_2 += 2 * 0.5^0, U_0 += 2 * 0.5^5 (5 steps, 1 hop).
+    utility, prev, time = np.zeros(3), np.array([-1, -1, 0]), np.array([0, 1, 5])
+    kernels.eq6(utility, prev, time, 2, 2.0, 0.5, 0.01)
+    np.testing.assert_array_equal(utility, [2 * 0.5 ** 5, 0.0, 2.0])
+    kernels.eq6(utility, prev, time, 2, 2.0, 0.5, 0.05)  # 0.5^5 = 0.031 < 0.05: stops
+    np.testing.assert_array_equal(utility, [2 * 0.5 ** 5, 0.0, 4.0])
 
 
 def test_eq7_reliability_along_backward_links_both_signs():

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 import ebrl
-from ebrl import intrinsic
+from ebrl import intrinsic, kernels
 
 
 def chains_are_consistent(ag):
@@ -28,18 +28,22 @@ def test_invariants_under_random_episodes(groups):
     cfg = ebrl.Config(memory_size=32, recall_size=4, exploration_rate=0.3)
     ag = ebrl.Agent(cfg, 5, 1, intrinsic.RandomWalk(1), groups=groups,
                     group_weights=None if groups is None else [0.7, 0.3], seed=2)
+    fed = set()
     for step in range(3000):
-        ag.act(rng.random(5) * [1, 1, 1, 3, 0.1])
+        x = rng.random(5) * [1, 1, 1, 3, 0.1]
+        fed.add(tuple(x))
+        ag.act(x)
         last = rng.random() < 0.03
         ag.learn(1.0 if last else 0.0, last)
         assert ag.size <= cfg.memory_size
         if step % 97 == 0:
             chains_are_consistent(ag)
-            stored = ag._x[: ag.size]
+            stored = ag._inputs[:, : ag.size].T
+            assert all(tuple(m) in fed for m in stored)  # inputs stored exactly as given
             np.testing.assert_allclose(ag.variance, np.maximum(stored.var(axis=0), 1e-6), rtol=1e-6)
-            np.testing.assert_allclose(ag._aug[:5, : ag.size].T, stored, rtol=1e-6)
-            table, _ = ag.recall_table()
+            table, weights = ag.recall_table()
             assert len(set(table.tolist())) == len(table) <= cfg.recall_size
+            assert np.all(table < ag.size) and np.all(np.diff(weights) <= 0)  # best first
             assert np.all(ag.reliability > 0) and np.all(ag.reliability <= 1.0)
     assert ag.size == cfg.memory_size
 
@@ -53,7 +57,7 @@ def test_forgetting_takes_the_least_reliable_and_splices_links():
     # one episode 0 -> 1 -> 2 -> 3; element 0 is oldest, least reliable.
     ag.act(np.array([9.0]))
     ag.learn(0.0)
-    assert ag._x[0, 0] == 9.0  # slot 0 reused for the new element
+    assert ag._inputs[0, 0] == 9.0  # slot 0 reused for the new element
     assert ag._prev[1] == -1 and ag._next[3] == 0 and ag._prev[0] == 3
     np.testing.assert_allclose(ag.variance, np.var([9.0, 1, 2, 3]))
 
@@ -68,35 +72,51 @@ def test_cost_is_flat_and_memory_capped_over_long_runs():
     assert np.isfinite(ag.reliability).all() and (ag.reliability > 0).all()
 
 
-def test_recall_selection_is_the_stable_top_n_r_whatever_the_radius():
-    """_nearest, which sorts only elements within an adaptive radius, must give exactly the
-    N_r smallest distances, ties to the lower slot, on data with and without ties."""
+def test_recall_selection_is_the_stable_top_n_r():
+    """The recall kernel keeps exactly the N_r largest weights, best first, ties to the
+    lower slot, on data with and without ties."""
     rng = np.random.default_rng(3)
-    ag = ebrl.Agent(ebrl.Config(memory_size=512, recall_size=7), 2, 1, intrinsic.RandomWalk(1), seed=0)
+    no_links = np.full(512, -1, dtype=np.int64)
     for trial in range(400):
         kind = trial % 4
         if kind == 0:
-            d = rng.random(512).astype(np.float32)
+            w = rng.random(512)
         elif kind == 1:  # many ties, including at the cut
-            d = rng.integers(0, 5, 512).astype(np.float32)
-        elif kind == 2:  # spread over orders of magnitude: the radius is often wrong
-            d = (10.0 ** rng.uniform(-6, 2, 512)).astype(np.float32)
+            w = rng.integers(0, 5, 512).astype(np.float64)
+        elif kind == 2:  # spread over orders of magnitude, either sign
+            w = (10.0 ** rng.uniform(-6, 2, 512)) * rng.choice([-1, 1], 512)
         else:  # all equal
-            d = np.full(512, 0.5, dtype=np.float32)
-        want = np.argsort(d, kind="stable")[:7]
-        got = ag._nearest(d)
-        np.testing.assert_array_equal(got, want)
+            w = np.full(512, 0.5)
+        size = 512 if trial % 5 else int(rng.integers(1, 12))  # fewer than N_r at times
+        table, table_w = np.full(7, -1, dtype=np.int64), np.zeros(7)
+        kernels.recall(w.copy(), size, no_links, table, table_w, 0.5)
+        want = np.argsort(-w[:size], kind="stable")[:7]
+        np.testing.assert_array_equal(table[: len(want)], want)
+        np.testing.assert_array_equal(table_w[: len(want)], w[want])
+        assert (table[len(want):] == -1).all()
+
+
+def test_forgetting_takes_the_first_of_equal_reliabilities():
+    rel = np.array([0.5, 0.25, 0.75, 0.25, 0.25])
+    assert kernels.least_reliable(rel, 5) == 1
+    assert kernels.least_reliable(rel, 1) == 0
 
 
 @pytest.mark.parametrize("memory_size,obs_dim,groups", [(7, 3, None), (33, 5, [[0, 1, 2], [3, 4]]),
                                                          (4096, 10, [range(8), range(8, 10)])])
-def test_memory_arrays_are_disjoint_aligned_and_initialised(memory_size, obs_dim, groups):
+def test_memory_arrays_are_disjoint_and_initialised(memory_size, obs_dim, groups):
     cfg = ebrl.Config(memory_size=memory_size, recall_size=7)
     ag = ebrl.Agent(cfg, obs_dim, 2, intrinsic.RandomWalk(2), seed=0,
                     groups=groups, group_weights=None if groups is None else [0.7, 0.3])
-    arrays = [ag._aug, ag._xs, ag._action, ag._utility, ag._rel, ag._next, ag._d2, ag._d]
+    arrays = [ag._inputs, ag._action, ag._utility, ag._rel, ag._time, ag._next, ag._prev,
+              ag._sums, ag._var, ag._sim, ag._table, ag._table_w]
     for i, a in enumerate(arrays):
-        assert a.ctypes.data % 64 == 0
+        assert a.flags.c_contiguous and a.flags.writeable
         assert not any(np.shares_memory(a, b) for b in arrays[i + 1:])
-    assert (ag._aug == 1).all() and (ag._next == -1).all() and not ag._xs.any()
-    assert ag._aug.shape == (2 * obs_dim + 1, memory_size) and ag._d2.shape[1] == memory_size
+    assert (ag._next == -1).all() and (ag._prev == -1).all() and (ag._table == -1).all()
+    assert not ag._inputs.any() and not ag._sums.any()
+    assert ag._inputs.shape == (obs_dim, memory_size) and ag._action.shape == (memory_size, 2)
+    # The kernels' argument tuples hold these very arrays (updated in place, never rebound).
+    held = arrays + [ag._group_of, ag._group_size, ag._group_weight]
+    assert all(any(a is b for b in held)
+               for a in ag._act_args + ag._learn_args if isinstance(a, np.ndarray))

@@ -1,0 +1,246 @@
+"""The agent's per-step work (Section 2) as compiled kernels, one per paper equation.
+
+Every kernel is ``@njit(cache=True)``: compiled once, then loaded from numba's cache
+(``ebrl/__pycache__``) by later processes and spawned workers. None uses ``fastmath``
+or ``parallel``, so every floating-point operation runs as written, in the order
+written, and a run gives the same numbers bit for bit on any machine and with any
+number of workers. (The compiler may process several memory elements at once with
+vector instructions; each element's value is computed by the same operations in the
+same order, so this changes no value.)
+
+The memory, as the kernels see it (M = memory_size, n = obs_dim):
+    inputs[i, m]   component i of element m's input (one row per component, so that
+                   eq 2-4 run along rows, over the elements)
+    actions[m]     element m's action
+    utility[m]     U_m (eq 5, eq 6);   rel[m]: R_m (eq 7, time discount, forgetting)
+    time[m]        the step at which m was stored (eq 6's exponent)
+    nxt[m], prev[m] m's forward and backward links in its episode, -1 for none
+    sums[0], sums[1] running sums of x and x^2 over the stored inputs (eq 2's V_i)
+Elements 0..size-1 are stored. The recall table is table[e] (an element, -1 for an
+empty entry) and table_w[e] (its weight W), best first: larger weight, then lower
+element.
+"""
+import numpy as np
+from numba import njit
+
+INVALID = -2  # act's answer for an observation that is not finite or whose square overflows
+
+
+@njit(cache=True)
+def eq1(weight, similarity, alpha):
+    """eq 1: W <- W + alpha (S(M_i, s) - W), for an entry moved along its forward link."""
+    return weight + alpha * (similarity - weight)
+
+
+@njit(cache=True)
+def eq5(weights, utilities):
+    """eq 5's measure, min(W_i, U_i), for each recall-table entry (scalars or arrays)."""
+    return np.minimum(weights, utilities)
+
+
+@njit(cache=True)
+def similarities(x, inputs, size, variance, group_of, group_size, group_weight, out):
+    """eq 2-4: out[m] = S(M_m, x) for every stored element m < size.
+
+    eq 4 for each group j of components: S'_j = 1 - sqrt(1/(2 n_j) sum_{i in j}
+    (x_i - m_i)^2 / V_i); eq 3: S = sum_j w_j S'_j, with the weights w_j already
+    divided by their sum. With one group (weight 1) this is eq 2. Each sum runs over
+    the components in index order, as `ebrl.similarity` does.
+    """
+    groups = group_weight.shape[0]
+    radicand = np.zeros((groups, size))
+    for i in range(x.shape[0]):
+        acc, row, xi, v = radicand[group_of[i]], inputs[i], x[i], variance[i]
+        for m in range(size):
+            d = xi - row[m]
+            acc[m] += d * d / v
+    out[:size] = 0.0
+    for j in range(groups):
+        acc, w, twice_n = radicand[j], group_weight[j], 2.0 * group_size[j]
+        for m in range(size):
+            out[m] += w * (1.0 - np.sqrt(acc[m] / twice_n))
+
+
+@njit(cache=True)
+def recall(sim, size, nxt, table, table_w, alpha):
+    """The recall table (2.2) for the new input, whose similarities are sim[:size].
+
+    eq 1: each entry moves along its forward link (an entry at the end of its episode
+    drops out) and its weight becomes W + alpha (S - W) with S the similarity of the
+    element it reaches. Every stored element is a candidate with its similarity S; an
+    element reached by an entry keeps the larger of the two. The N_r = len(table)
+    candidates of largest weight form the new table, best first, equal weights to the
+    lower element. sim is overwritten with the candidates' weights.
+    """
+    for e in range(table.shape[0]):
+        if table[e] >= 0:
+            ahead = nxt[table[e]]
+            if ahead >= 0:
+                sim[ahead] = max(sim[ahead], eq1(table_w[e], sim[ahead], alpha))
+    table[:] = -1
+    k, count = table.shape[0], 0
+    lowest = -np.inf  # once the table is full: the weight a candidate must exceed
+    for m in range(size):
+        w = sim[m]
+        if count == k:
+            if not w > lowest:
+                continue
+        else:
+            count += 1
+        e = count - 1  # insert after every entry of equal or larger weight
+        while e > 0 and table_w[e - 1] < w:
+            table[e], table_w[e] = table[e - 1], table_w[e - 1]
+            e -= 1
+        table[e], table_w[e] = m, w
+        if count == k:
+            lowest = table_w[k - 1]
+
+
+@njit(cache=True)
+def policy(table, table_w, utility, threshold):
+    """eq 5: the element of the entry maximising min(W_i, U_i), the first in table
+    order on ties (larger weight, then lower element); -1 when no entry's measure
+    exceeds threshold."""
+    best, best_measure = -1, -np.inf
+    for e in range(table.shape[0]):
+        if table[e] >= 0:
+            measure = eq5(table_w[e], utility[table[e]])
+            if measure > best_measure:
+                best, best_measure = table[e], measure
+    return best if best_measure > threshold else -1
+
+
+@njit(cache=True)
+def act(x, size, inputs, variance, group_of, group_size, group_weight, sim, nxt,
+        table, table_w, utility, alpha, threshold):
+    """One act: eq 2-4 against the memory, the recall table (eq 1), eq 5's choice.
+
+    Returns the element whose action eq 5 picks, -1 for none, or INVALID (with nothing
+    changed) when x is not finite or its square overflows (the variance sums need x^2).
+    """
+    square = 0.0
+    for i in range(x.shape[0]):
+        square += x[i] * x[i]
+    if not np.isfinite(square):
+        return INVALID
+    similarities(x, inputs, size, variance, group_of, group_size, group_weight, sim)
+    recall(sim, size, nxt, table, table_w, alpha)
+    return policy(table, table_w, utility, threshold)
+
+
+@njit(cache=True)
+def least_reliable(rel, size):
+    """The element of lowest reliability, the first on ties (forgetting, 2.1)."""
+    found = 0
+    for m in range(1, size):
+        if rel[m] < rel[found]:
+            found = m
+    return found
+
+
+@njit(cache=True)
+def forget(k, inputs, sums, nxt, prev, table, table_w, tail, referred):
+    """Removes element k (2.1): its episode's neighbours are linked to each other, a
+    recall entry pointing at it is dropped, its input leaves the variance sums.
+    Returns (tail, referred), moved back to k's predecessor if either was k."""
+    p, n = prev[k], nxt[k]
+    if p >= 0:
+        nxt[p] = n
+    if n >= 0:
+        prev[n] = p
+    nxt[k] = prev[k] = -1
+    if tail == k:
+        tail = p
+    if referred == k:
+        referred = p
+    kept = 0
+    for e in range(table.shape[0]):
+        if table[e] >= 0 and table[e] != k:
+            table[kept], table_w[kept] = table[e], table_w[e]
+            kept += 1
+    table[kept:] = -1
+    for i in range(inputs.shape[0]):
+        xi = inputs[i, k]
+        sums[0, i] -= xi
+        sums[1, i] -= xi * xi
+    return tail, referred
+
+
+@njit(cache=True)
+def update_variance(sums, size, floor, variance):
+    """eq 2's V_i = mean(x_i^2) - mean(x_i)^2 over the stored inputs, from the running
+    sums, floored at floor."""
+    for i in range(variance.shape[0]):
+        mean = sums[0, i] / size
+        v = sums[1, i] / size - mean * mean
+        variance[i] = v if v > floor else floor
+
+
+@njit(cache=True)
+def eq6(utility, prev, time, newest, reward, discount, cutoff):
+    """eq 6: U_j += r gamma^(t - t_j) along the backward links from the newest element
+    (time t), t_j being element j's time stamp; stops where gamma^(t - t_j) < cutoff.
+
+    gamma^k is computed by repeated squaring (numba's float ** int): IEEE products
+    only, the same on every machine."""
+    t, j = time[newest], newest
+    while j >= 0:
+        gain = discount ** (t - time[j])
+        if gain < cutoff:
+            break
+        utility[j] += reward * gain
+        j = prev[j]
+
+
+@njit(cache=True)
+def eq7(rel, prev, referred, reward, rho):
+    """eq 7 along the backward links from the element used for the last memory decision
+    to its episode's start: R += rho r (1 - R) when r > 0, R += rho r R when r < 0."""
+    j = referred
+    while j >= 0:
+        r = rel[j]
+        rel[j] = r + rho * reward * ((1.0 - r) if reward > 0 else r)
+        j = prev[j]
+
+
+@njit(cache=True)
+def time_discount(rel, size, rate):
+    """2.1: every stored element's reliability times the time discount rate."""
+    for m in range(size):
+        rel[m] *= rate
+
+
+@njit(cache=True)
+def learn(x, action, reward, step, size, tail, referred, inputs, sums, variance, actions,
+          utility, rel, time, nxt, prev, table, table_w, floor, initial_utility,
+          initial_reliability, discount, cutoff, rho, decay):
+    """One learn: stores (x, action) as the episode's next element, in a free slot or,
+    when the memory is full, in the least reliable element's (forgotten first); then
+    eq 6 and eq 7 if reward != 0, then the time discount. Returns (size, tail, referred).
+    """
+    if size == rel.shape[0]:
+        slot = least_reliable(rel, size)
+        tail, referred = forget(slot, inputs, sums, nxt, prev, table, table_w, tail, referred)
+    else:
+        slot = size
+        size += 1
+    for i in range(x.shape[0]):
+        inputs[i, slot] = x[i]
+        sums[0, i] += x[i]
+        sums[1, i] += x[i] * x[i]
+    update_variance(sums, size, floor, variance)
+    actions[slot] = action
+    utility[slot] = initial_utility
+    rel[slot] = initial_reliability
+    time[slot] = step
+    nxt[slot] = -1
+    prev[slot] = tail
+    if tail >= 0:
+        nxt[tail] = slot
+    tail = slot
+    if reward != 0.0:
+        eq6(utility, prev, time, slot, reward, discount, cutoff)
+        if referred >= 0:
+            eq7(rel, prev, referred, reward, rho)
+    time_discount(rel, size, decay)
+    return size, tail, referred
