@@ -13,6 +13,7 @@ import collections
 import math
 
 import mujoco
+import numba
 import numpy as np
 from dm_control import mujoco as dm_mujoco
 from dm_control.rl import control
@@ -42,17 +43,54 @@ class ContractError(ValueError):
     """A robot file that lacks a part the naming contract asks for."""
 
 
-def encode_range(distance):
+# The per-step sensor arithmetic runs as two small compiled loops: on 7-8 readings,
+# numpy's per-call overhead (about 0.3 us a call, a dozen calls) cost more than the
+# sensing itself. Same operations in the same order, so the same bits (tested).
+_PER_UNIT = -SENSOR_LEVELS / SENSOR_RANGE
+
+
+@numba.njit(cache=True)
+def _surface_distances(raw, metres_to_units, radius):
+    """Rangefinder readings (m from the centre; -1 = no hit) -> units from the surface."""
+    out = np.empty(raw.shape[0])
+    for i in range(raw.shape[0]):
+        out[i] = np.inf if raw[i] < 0.0 else raw[i] * metres_to_units - radius
+    return out
+
+
+@numba.njit(cache=True)
+def _encode(distance, noise, levels, per_unit):
+    """Section 3.2's code of each distance, plus noise (if any) clipped to [0, levels].
+    max/min as numpy's maximum/minimum (the second argument unless the first is larger:
+    max(-0.0, 0.0) is 0.0)."""
+    out = np.empty(distance.shape[0])
+    for i in range(distance.shape[0]):
+        d = distance[i]
+        c = d if d > 0.0 else 0.0
+        c = c * per_unit
+        c = c + levels
+        c = np.rint(c)
+        c = c if c > 0.0 else 0.0
+        if noise.shape[0]:
+            c = c + noise[i]
+            c = c if c > 0.0 else 0.0
+            c = c if c < levels else levels
+        out[i] = c
+    return out
+
+
+_NO_NOISE = np.zeros(0)
+
+
+def encode_range(distance, noise=_NO_NOISE):
     """Section 3.2: surface distance in units (inf = no hit) -> code in 0..255.
 
     0 when nothing is within SENSOR_RANGE, else round(255 * (1 - d / 14)), so a
-    touching beam (d <= 0) reads 255.
+    touching beam (d <= 0) reads 255. With noise (one value per reading), the noisy
+    code clipped to [0, 255].
     """
-    code = np.maximum(distance, 0.0)
-    code *= -SENSOR_LEVELS / SENSOR_RANGE
-    code += SENSOR_LEVELS
-    np.rint(code, out=code)
-    return np.maximum(code, 0.0, out=code)
+    return _encode(np.asarray(distance, dtype=np.float64), noise, float(SENSOR_LEVELS),
+                   _PER_UNIT)
 
 
 def _id(model, kind, name):
@@ -164,11 +202,7 @@ class Physics(dm_mujoco.Physics):
         model.opt.disableflags &= ~self._sensor_bit
         mujoco.mj_sensorPos(model, data)
         model.opt.disableflags |= self._sensor_bit
-        raw = self._sensordata[self._beams]
-        distance = raw * (1.0 / UNIT)
-        distance -= self.robot_radius
-        distance[raw < 0.0] = np.inf
-        return distance
+        return _surface_distances(self._sensordata[self._beams], 1.0 / UNIT, self.robot_radius)
 
     def in_goal(self):
         """True when the robot's centre is inside the goal square."""
@@ -247,11 +281,11 @@ class Navigation(base.Task):
 
     def sense(self, physics):
         """Encoded readings (Section 3.2) plus Gaussian noise, clipped to [0, 255]."""
-        code = encode_range(physics.ranges())
+        distance = physics.ranges()
         if self.sensor_noise > 0:
-            code += self.random.normal(0.0, self.sensor_noise, size=code.shape)
-            np.minimum(np.maximum(code, 0.0, out=code), SENSOR_LEVELS, out=code)
-        return code
+            return encode_range(distance, self.random.normal(0.0, self.sensor_noise,
+                                                             size=distance.shape))
+        return encode_range(distance)
 
     def after_step(self, physics):
         self._at_goal = physics.in_goal()

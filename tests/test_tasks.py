@@ -307,3 +307,24 @@ class TwoWheelContractTest(_Contract, test_utils.EnvironmentTestMixin, absltest.
 
 class FloatingContractTest(_Contract, test_utils.EnvironmentTestMixin, absltest.TestCase):
     robot = "floating"
+
+
+def test_compiled_sensing_equals_the_numpy_formula_bit_for_bit():
+    """Section 3.2 as numpy writes it, against the compiled loops the task runs."""
+    rng = np.random.default_rng(0)
+    raw = np.concatenate([rng.uniform(0.0, 2.0, 5000), [-1.0, 0.15, 0.149, 1.55, 1.4 + 0.15]])
+    radius = 1.5
+    distance = raw * (1.0 / 0.1)
+    distance -= radius
+    distance[raw < 0.0] = np.inf
+    code = np.maximum(distance, 0.0)
+    code *= -255 / 14.0
+    code += 255
+    np.rint(code, out=code)
+    np.maximum(code, 0.0, out=code)
+    noise = rng.normal(0.0, 12.75, size=code.shape)
+    noisy = np.minimum(np.maximum(code + noise, 0.0), 255)
+    got = navigation._surface_distances(raw, 1.0 / 0.1, radius)
+    assert got.tobytes() == distance.tobytes()
+    assert navigation.encode_range(got).tobytes() == code.tobytes()
+    assert navigation.encode_range(got, noise).tobytes() == noisy.tobytes()
