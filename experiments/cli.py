@@ -1,13 +1,20 @@
 """The `ebrl` command (also `python -m experiments`): robots, run, report, render, bench,
-check, sweep, demo."""
+check, sweep, demo.
+
+Exit status: 0 done; 1 some runs failed (each recorded in its run.json, named by the
+report, retried by a rerun); 2 a bad argument (one line, nothing written); 130 Ctrl-C
+(finished runs kept; the same command resumes).
+"""
 import argparse
 import os
 import pathlib
 import sys
 
-from experiments import paper
+from experiments import paper, validate
 
 USAGE_ERROR = 2
+RUNS_FAILED = 1
+INTERRUPTED = 130
 
 
 class _Parser(argparse.ArgumentParser):
@@ -17,55 +24,15 @@ class _Parser(argparse.ArgumentParser):
         self.exit(USAGE_ERROR, f"{self.prog}: error: {message}\n")
 
 
-def _fail(message):
+def _fail(message, status=USAGE_ERROR):
     print(f"ebrl: error: {message}", file=sys.stderr)
-    return USAGE_ERROR
-
-
-def parse_seeds(text):
-    """'0-49', '7' or '1,3,5' -> sorted list of seeds."""
-    seeds = set()
-    for part in text.split(","):
-        part = part.strip()
-        try:
-            if "-" in part:
-                lo, hi = (int(v) for v in part.split("-", 1))
-                if hi < lo:
-                    raise argparse.ArgumentTypeError(f"reversed seed range {part!r}")
-                seeds.update(range(lo, hi + 1))
-            else:
-                seeds.add(int(part))
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"bad seed range {text!r} (use e.g. 0-49)") from None
-    if not seeds:
-        raise argparse.ArgumentTypeError(f"empty seed range {text!r}")
-    if min(seeds) < 0:
-        raise argparse.ArgumentTypeError("seeds must be non-negative")
-    return sorted(seeds)
-
-
-def positive_int(text):
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"must be positive, got {value}")
-    return value
-
-
-def _choice(valid):
-    def check(text):
-        if text not in valid:
-            raise argparse.ArgumentTypeError(f"unknown {text!r}; valid: {', '.join(valid)}")
-        return text
-    return check
+    return status
 
 
 def robot_list(text):
     """--robot: a registered name, several joined by commas, "paper" (the paper's two
     robots), "all" (every registered robot), or a path to a robot .xml file (with
-    --drive)."""
+    --drive). The names come from the registry, tasks/robots.py."""
     from tasks.robots import PAPER_ROBOTS, ROBOTS
     if text == "paper":
         return PAPER_ROBOTS
@@ -82,12 +49,57 @@ def robot_list(text):
     return names
 
 
-def _robot_args(parser, default):
+def _robot_args(parser, default, several=True):
+    """--robot and --drive, from the registry."""
     from tasks.robots import DRIVES
-    parser.add_argument("--robot", type=robot_list, default=robot_list(default),
-                        help=f"default: {default} (see 'ebrl robots')")
+    if several:
+        parser.add_argument("--robot", type=robot_list, default=robot_list(default),
+                            help=f"default: {default}; see 'ebrl robots'")
+    else:
+        parser.add_argument("--robot", type=_one_robot, required=True,
+                            help="a registered name (see 'ebrl robots') or a robot .xml file")
     parser.add_argument("--drive", type=_choice(tuple(DRIVES)), default=None,
                         help="the drive of a robot given as a file: " + ", ".join(DRIVES))
+
+
+def _one_robot(text):
+    robots = robot_list(text)
+    if len(robots) != 1:
+        raise argparse.ArgumentTypeError(f"one robot, got {text!r}")
+    return robots[0]
+
+
+def _argument(check):
+    """validate's ValueError as argparse's error (one line, exit status 2)."""
+    def wrapped(text):
+        try:
+            return check(text)
+        except ValueError as e:
+            raise argparse.ArgumentTypeError(str(e)) from None
+    return wrapped
+
+
+def parse_seeds(text):
+    """'0-49', '7' or '1,3,5' -> sorted list of seeds (0 to validate.MAX_SEED, at most
+    validate.MAX_SEEDS of them)."""
+    return _argument(validate.seeds)(text)
+
+
+def positive_int(text, maximum=sys.maxsize):
+    return _argument(lambda t: validate.integer(t, 1, maximum))(text)
+
+
+def _up_to(maximum):
+    """A positive integer at most maximum, for argparse."""
+    return lambda text: positive_int(text, maximum)
+
+
+def _choice(valid):
+    def check(text):
+        if text not in valid:
+            raise argparse.ArgumentTypeError(f"unknown {text!r}; valid: {', '.join(valid)}")
+        return text
+    return check
 
 
 def _override(text):
@@ -101,14 +113,10 @@ def _override(text):
         raise argparse.ArgumentTypeError(f"bad --set {text!r}; use NAME=VALUE with NAME one of "
                                          + ", ".join(fields))
     kind = type(getattr(ebrl.Config(), name))
-    try:
-        return name, kind(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"bad value for {name}: {value!r}") from None
+    return name, _argument(lambda v: validate.number(kind, name, v))(value)
 
 
 def build_parser():
-    from tasks.robots import DRIVES
     p = _Parser(prog="ebrl", description=__doc__)
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
@@ -118,10 +126,12 @@ def build_parser():
     _robot_args(r, "paper")
     r.add_argument("--condition", type=_choice(paper.CONDITIONS + ("all",)), default="all")
     r.add_argument("--seeds", type=parse_seeds, default=list(range(paper.SEEDS)),
-                   help="e.g. 0-49 (default), 3, or 1,4,9")
-    r.add_argument("--steps", type=positive_int, default=None,
-                   help="agent steps per run (default: the robot's budget, 'ebrl robots')")
-    r.add_argument("--workers", type=positive_int, default=os.cpu_count() or 1)
+                   help=f"e.g. 0-49 (default), 3, or 1,4,9; seeds 0 to {validate.MAX_SEED:,}, "
+                        f"at most {validate.MAX_SEEDS:,} of them")
+    r.add_argument("--steps", type=_up_to(validate.MAX_STEPS), default=None,
+                   help="agent steps per run (default: the robot's budget, 'ebrl robots'; "
+                        f"at most {validate.MAX_STEPS:,})")
+    r.add_argument("--workers", type=_up_to(validate.MAX_WORKERS), default=os.cpu_count() or 1)
     r.add_argument("--backend", type=_choice(("local", "ray")), default="local")
     r.add_argument("--out", type=pathlib.Path, default=pathlib.Path("results"))
     r.add_argument("--set", type=_override, action="append", default=[], metavar="NAME=VALUE",
@@ -136,29 +146,28 @@ def build_parser():
     rep.add_argument("--figures", type=pathlib.Path, default=pathlib.Path("docs/figures"))
 
     v = sub.add_parser("render", help="an offscreen MP4 of one run")
-    v.add_argument("--robot", required=True, help="a registered name or a robot .xml file")
-    v.add_argument("--drive", default=None, help="the drive of a robot given as a file")
+    _robot_args(v, None, several=False)
     v.add_argument("--camera", default="top",
                    help="top (default), perspective, or a camera of the robot's file")
     v.add_argument("--condition", type=_choice(paper.CONDITIONS), required=True)
-    v.add_argument("--seed", type=int, required=True)
-    v.add_argument("--steps", type=positive_int, default=3000)
+    v.add_argument("--seed", type=_argument(lambda t: validate.integer(t, 0, validate.MAX_SEED)),
+                   required=True)
+    v.add_argument("--steps", type=_up_to(validate.MAX_STEPS), default=3000)
     v.add_argument("--out", type=pathlib.Path, required=True)
 
     b = sub.add_parser("bench", help="microseconds per agent step, by part")
     b.add_argument("--robot", type=robot_list, default=robot_list("all"),
                    help="default: every registered robot")
-    b.add_argument("--steps", type=positive_int, default=2000, help="timed steps per block")
-    b.add_argument("--blocks", type=positive_int, default=5, help="medians over this many blocks")
+    b.add_argument("--steps", type=_up_to(validate.MAX_BENCH_STEPS), default=2000,
+                   help="timed steps per block")
+    b.add_argument("--blocks", type=_up_to(validate.MAX_BENCH_BLOCKS), default=5,
+                   help="medians over this many blocks")
 
     c = sub.add_parser("check", help="a robot's action accuracy and a random-action fuzz")
-    c.add_argument("--robot", type=robot_list, default=robot_list("all"),
-                   help="default: every registered robot")
-    c.add_argument("--drive", type=_choice(tuple(DRIVES)), default=None,
-                   help="the drive of a robot given as a file")
-    c.add_argument("--actions", type=positive_int, default=100_000,
+    _robot_args(c, "all")
+    c.add_argument("--actions", type=_up_to(validate.MAX_STEPS), default=100_000,
                    help="random actions of the fuzz (default: %(default)s)")
-    c.add_argument("--accuracy-actions", type=positive_int, default=1000,
+    c.add_argument("--accuracy-actions", type=_up_to(validate.MAX_STEPS), default=1000,
                    help="free-space actions of the accuracy check (default: %(default)s)")
 
     w = sub.add_parser("sweep", help="the protocol at several values of one agent parameter")
@@ -168,8 +177,8 @@ def build_parser():
     _robot_args(w, "paper")
     w.add_argument("--condition", type=_choice(paper.CONDITIONS + ("all",)), default="all")
     w.add_argument("--seeds", type=parse_seeds, default=list(range(20)))
-    w.add_argument("--steps", type=positive_int, default=None)
-    w.add_argument("--workers", type=positive_int, default=os.cpu_count() or 1)
+    w.add_argument("--steps", type=_up_to(validate.MAX_STEPS), default=None)
+    w.add_argument("--workers", type=_up_to(validate.MAX_WORKERS), default=os.cpu_count() or 1)
     w.add_argument("--out", type=pathlib.Path, default=pathlib.Path("sweeps"))
     w.add_argument("--baseline", type=pathlib.Path, default=None,
                    help="a run folder (e.g. results) whose runs at the default value join the "
@@ -178,22 +187,75 @@ def build_parser():
 
     d = sub.add_parser("demo", help="a quick protocol, its report and one video")
     d.add_argument("--out", type=pathlib.Path, default=pathlib.Path("demo_results"))
-    d.add_argument("--workers", type=positive_int, default=os.cpu_count() or 1)
+    d.add_argument("--workers", type=_up_to(validate.MAX_WORKERS), default=os.cpu_count() or 1)
     return p
+
+
+def _selected_robots(args):
+    return args.robot if isinstance(args.robot, tuple) else (args.robot,)
+
+
+def _check_robots(args):
+    """Registered robots are known; a robot file is loaded once here, so a missing part
+    (the naming contract, docs/adding_a_robot.md) is one line before any run."""
+    from tasks.robots import ROBOTS, resolve
+    for robot in _selected_robots(args):
+        resolve(robot, args.drive)
+        if robot not in ROBOTS:
+            import tasks
+            tasks.load(robot, drive=args.drive).close()
+
+
+def _check_agent(args, overrides):
+    """--set values (or a sweep's): each name once, and a config that ebrl.Config accepts
+    for every selected robot, checked here rather than in the workers."""
+    names = [name for name, _ in overrides]
+    twice = next((name for name in names if names.count(name) > 1), None)
+    if twice is not None:
+        raise ValueError(f"--set {twice} is given more than once")
+    validate.agent_configs(_selected_robots(args), overrides, args.drive)
+
+
+def _check_backend(backend):
+    import importlib.util
+    if backend == "ray" and importlib.util.find_spec("ray") is None:
+        raise ValueError("--backend ray needs Ray: pip install -e '.[ray]'")
+
+
+def _report_if_any(folder, ran):
+    """Rebuilds the report unless every run of this command failed and none is on disk."""
+    from experiments import report
+    return report.build(folder) if ran.made or ran.on_disk else None
+
+
+def _failed_line(failed, what="failed"):
+    """'N runs failed: a, b, c and K more (first error: ...)' for (name, error) pairs."""
+    names = [name for name, _ in failed]
+    shown = ", ".join(names[:5]) + (f" and {len(names) - 5} more" if len(names) > 5 else "")
+    if len(names) == 1:
+        return f"1 run {what}: {shown} ({failed[0][1]})"
+    return f"{len(names)} runs {what}: {shown} (first error: {failed[0][1]})"
+
+
+def _run_summary(ran, path):
+    """The command's last line: on stdout when every run is done, else on stderr with the
+    failed runs named, and exit status 1."""
+    report = f"report: {path}" if path is not None else "no report (no complete run)"
+    line = f"{ran.made} runs made, {ran.on_disk} already on disk; {report}"
+    if not ran.failed:
+        print(line)
+        return 0
+    return _fail(f"{_failed_line([(s.name, e) for s, e in ran.failed])}; recorded in "
+                 f"run.json, not averaged; {line}; rerun the same command to retry",
+                 RUNS_FAILED)
 
 
 def _plan(args, overrides=()):
     """The specs that --robot, --condition, --seeds and --steps select."""
     from experiments import runner
     conditions = paper.CONDITIONS if args.condition == "all" else (args.condition,)
-    return runner.plan(args.robot, conditions, args.seeds, args.steps, overrides, args.drive)
-
-
-def _check_robots(args):
-    """Loads each robot's model once (a user's file can lack a part): ValueError if not."""
-    import tasks
-    for robot in args.robot:
-        tasks.load(robot, drive=args.drive).close()
+    return runner.plan(_selected_robots(args), conditions, args.seeds, args.steps, overrides,
+                       args.drive)
 
 
 def cmd_robots(args):
@@ -206,62 +268,65 @@ def cmd_robots(args):
 
 
 def cmd_run(args):
-    from experiments import report, results, runner
     try:
+        validate.output_folder(args.out, "--out")
         _check_robots(args)
-        specs = _plan(args, args.set)
+        _check_agent(args, args.set)
+        _check_backend(args.backend)
     except ValueError as e:
         return _fail(str(e))
+    from experiments import results, runner
+    specs = _plan(args, args.set)
     try:
         ran = runner.run(specs, args.out, workers=args.workers, backend=args.backend,
                          progress=not args.no_progress)
-        path = report.build(args.out)
+        path = _report_if_any(args.out, ran)
     except results.ResultsError as e:
         return _fail(str(e))
-    print(f"{ran} runs made, {len(specs) - ran} already on disk; report: {path}")
-    return 0
+    return _run_summary(ran, path)
 
 
 def cmd_report(args):
+    try:
+        validate.results_folder(args.dir, writable=True)
+        validate.output_folder(args.dir / "figures", "the figures folder")
+        if args.results is not None:
+            validate.output_file(args.results, "--results")
+            validate.output_folder(args.figures, "--figures")
+    except ValueError as e:
+        return _fail(str(e))
     from experiments import report, results
-    if not args.dir.is_dir():
-        return _fail(f"no results folder at {args.dir}")
     try:
         path = report.build(args.dir)
         if args.results is not None:
             print(f"published: {report.publish(args.dir, args.results, args.figures)}")
+        failed = results.failed_runs(args.dir)
     except results.ResultsError as e:
         return _fail(str(e))
     print(f"report: {path}")
+    if failed:
+        return _fail(_failed_line(sorted(failed.items()), "failed and not averaged")
+                     + "; rerun `ebrl run` to retry", RUNS_FAILED)
     return 0
 
 
 def cmd_render(args):
+    try:
+        validate.output_file(args.out, "--out", suffix=".mp4")
+        _check_robots(args)
+    except ValueError as e:
+        return _fail(str(e))
     from experiments import protocol, rendering
-    if args.out.suffix.lower() != ".mp4":
-        return _fail(f"--out must end in .mp4, got {args.out}")
-    if not args.out.parent.is_dir():
-        return _fail(f"no folder {args.out.parent} for --out")
     spec = protocol.RunSpec(args.robot, args.condition, args.seed, args.steps,
                             drive=args.drive)
     try:
-        spec.entry
         rendering.ensure_backend()
         rendering.check_camera(spec, args.camera)
-    except (ValueError, rendering.RenderingError) as e:
+    except rendering.RenderingError as e:
         return _fail(str(e))
     result = rendering.record(spec, args.out, camera=args.camera)
     print(f"video: {args.out} ({len(result['trial_ends'])} goals in {args.steps} steps)")
     return 0
-
-
-def cmd_check(args):
-    from experiments import robotcheck
-    try:
-        _check_robots(args)
-    except ValueError as e:
-        return _fail(str(e))
-    return robotcheck.main(args.robot, args.actions, args.accuracy_actions, args.drive)
 
 
 def cmd_bench(args):
@@ -270,20 +335,53 @@ def cmd_bench(args):
     return 0
 
 
-def cmd_sweep(args):
-    import ebrl
-    from experiments import report, results, runner
-    try:
-        values = [_override(f"{args.param}={v}") for v in args.values.split(",") if v.strip()]
-    except argparse.ArgumentTypeError as e:
-        return _fail(str(e))
-    if not values:
-        return _fail("--values is empty")
+def cmd_check(args):
     try:
         _check_robots(args)
     except ValueError as e:
         return _fail(str(e))
+    from experiments import robotcheck
+    return robotcheck.main(args.robot, args.actions, args.accuracy_actions, args.drive)
+
+
+def _sweep_values(args):
+    """--param and --values as (name, value) pairs, each value distinct and accepted by
+    ebrl.Config for the selected robots."""
+    import dataclasses
+
+    import ebrl
+    fields = [f.name for f in dataclasses.fields(ebrl.Config)]
+    if args.param not in fields:
+        raise ValueError(f"unknown --param {args.param!r}; one of {', '.join(fields)}")
+    try:
+        values = [_override(f"{args.param}={v.strip()}") for v in args.values.split(",")
+                  if v.strip()]
+    except argparse.ArgumentTypeError as e:
+        raise ValueError(str(e)) from None
+    if not values:
+        raise ValueError("--values is empty")
+    seen = [v for _, v in values]
+    repeated = next((v for v in seen if seen.count(v) > 1), None)
+    if repeated is not None:
+        raise ValueError(f"--values gives {args.param}={repeated} more than once")
+    for value in values:
+        _check_agent(args, [value])
+    return values
+
+
+def cmd_sweep(args):
+    import ebrl
+    try:
+        _check_robots(args)
+        values = _sweep_values(args)
+        validate.output_folder(args.out, "--out")
+        if args.baseline is not None:
+            validate.results_folder(args.baseline, "--baseline")
+    except ValueError as e:
+        return _fail(str(e))
+    from experiments import report, results, runner
     plans = [(args.out / f"{args.param}_{v}", _plan(args, [(n, v)])) for n, v in values]
+    failed = []
     try:
         baseline = None
         if args.baseline is not None:  # the default's runs, checked before running any
@@ -294,18 +392,23 @@ def cmd_sweep(args):
             baseline = results.load_runs(args.baseline, specs)
         for folder, specs in plans:  # refuse damaged or mismatched folders before running any
             runner.pending(folder, specs)
-        for folder, specs in plans:
-            runner.run(specs, folder, workers=args.workers, progress=not args.no_progress)
-            report.build(folder)
-        rows = [(v, results.load_runs(f)) for (_, v), (f, _) in zip(values, plans)]
+        rows = []
+        for ((_, v), (folder, specs)) in zip(values, plans):
+            ran = runner.run(specs, folder, workers=args.workers, progress=not args.no_progress)
+            failed += [(f"{folder.name}/{s.name}", e) for s, e in ran.failed]
+            if _report_if_any(folder, ran) is not None:
+                rows.append((v, results.load_runs(folder)))
         if baseline is not None:
             default = getattr(ebrl.Config(), args.param)
             rows = sorted(rows + [(default, baseline)], key=lambda row: row[0])
             rows = [(f"{v} (default, {args.baseline})" if runs is baseline else v, runs)
                     for v, runs in rows]
-        path = report.sweep_table(args.out, args.param, rows)
+        path = report.sweep_table(args.out, args.param, rows, failed) if rows else None
     except results.ResultsError as e:
         return _fail(str(e))
+    if failed:
+        return _fail(f"{_failed_line(failed)}; recorded in run.json, not averaged; "
+                     f"sweep: {path}; rerun the same command to retry", RUNS_FAILED)
     print(f"sweep: {path}")
     return 0
 
@@ -317,15 +420,21 @@ DEMO_VIDEO_STEPS = 3_000
 def cmd_demo(args):
     """A quick protocol: the paper's robots, 6 seeds at a fifth of their budgets (at least
     10,000 steps), then the report and one video."""
-    from experiments import protocol, rendering, report, results, runner
+    try:
+        validate.output_folder(args.out, "--out")
+    except ValueError as e:
+        return _fail(str(e))
+    from experiments import protocol, rendering, results, runner
     from tasks.robots import PAPER_ROBOTS, ROBOTS
     budgets = {r: max(10_000, ROBOTS[r].budget // 5) for r in PAPER_ROBOTS}
-    specs = runner.plan(tuple(budgets), paper.CONDITIONS, range(DEMO_SEEDS), budgets)
+    specs = runner.plan(PAPER_ROBOTS, paper.CONDITIONS, range(DEMO_SEEDS), budgets)
     print(f"demo: {len(specs)} runs ({DEMO_SEEDS} seeds x 2 robots x 2 conditions), budgets "
           + ", ".join(f"{k} {v:,} steps" for k, v in budgets.items()) + f" -> {args.out}/")
     try:
-        runner.run(specs, args.out, workers=args.workers)
-        path = report.build(args.out)
+        ran = runner.run(specs, args.out, workers=args.workers)
+        path = _report_if_any(args.out, ran)
+        if ran.failed:
+            return _run_summary(ran, path)
         rendering.ensure_backend()
     except (results.ResultsError, rendering.RenderingError) as e:
         return _fail(str(e))
@@ -337,13 +446,17 @@ def cmd_demo(args):
 
 
 def main(argv=None):
-    args = build_parser().parse_args(argv)
     try:
-        return {"robots": cmd_robots, "run": cmd_run, "report": cmd_report, "render": cmd_render,
-                "bench": cmd_bench, "check": cmd_check, "sweep": cmd_sweep, "demo": cmd_demo}[args.command](args)
+        args = build_parser().parse_args(argv)
+        return {"robots": cmd_robots, "run": cmd_run, "report": cmd_report,
+                "render": cmd_render, "bench": cmd_bench, "check": cmd_check,
+                "sweep": cmd_sweep, "demo": cmd_demo}[args.command](args)
     except KeyboardInterrupt:
         print("ebrl: interrupted; finished runs are kept, rerun to resume", file=sys.stderr)
-        return 130
+        return INTERRUPTED
+    except OSError as e:  # a disk that fills or a folder removed under the command, say
+        where = f": {e.filename}" if e.filename else ""
+        return _fail(f"{e.strerror or e}{where}")
 
 
 if __name__ == "__main__":

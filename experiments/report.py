@@ -249,7 +249,8 @@ def publish(root, results_md, figures_dir):
     for png in sorted((root / "figures").glob("*.png")):
         shutil.copyfile(png, figures_dir / png.name)
     rel = os.path.relpath(figures_dir, results_md.parent)
-    block = [BEGIN, "", "### Section 3.6, the paper against ours", "", comparison_table(summary), "",
+    block = [BEGIN, "", *failed_section(summary, "###"),
+             "### Section 3.6, the paper against ours", "", comparison_table(summary), "",
              "### Goals within the budget", "", goals_table(summary), "",
              "### Qualitative claims", "", claims_table(summary), ""]
     if "optimal" in summary:
@@ -276,7 +277,10 @@ def build(root):
     """Rebuilds summary.json, REPORT.md and the figures under root; returns REPORT.md's path."""
     root = pathlib.Path(root)
     runs = results.load_runs(root)
+    failed = results.failed_runs(root)  # named below, never averaged
     summary = results.summarize(runs)
+    if failed:
+        summary["failed"] = [{"run": name, "error": error} for name, error in failed.items()]
     figures = root / "figures"
     figures.mkdir(exist_ok=True)
     robots = sorted({k[0] for k in runs}, key=lambda r: (results.robot_order(r), r))
@@ -296,6 +300,7 @@ def build(root):
         f"# Report: {root}", "",
         f"{len(runs)} runs. Section 3.6 of Unemi (2000) beside ours; 95% intervals are "
         "percentile bootstraps over seeds.", "",
+        *failed_section(summary),
         "## Section 3.6 figures", "", comparison_table(summary), "",
         "## Goals within the budget", "", goals_table(summary), "",
         "## Qualitative claims", "", claims_table(summary), *extra, "",
@@ -309,9 +314,21 @@ def build(root):
     return root / "REPORT.md"
 
 
-def sweep_table(out, param, rows):
+def failed_section(summary, heading="##"):
+    """REPORT.md's (and RESULTS.md's) list of the failed runs, which no figure averages."""
+    failed = summary.get("failed")
+    if not failed:
+        return []
+    return ([f"{heading} Failed runs: {len(failed)}, not averaged", "",
+             "Each one's run.json holds its error and traceback; the command that made them, "
+             "run again, retries them.",
+             ""] + [f"- `{f['run']}`: {f['error']}" for f in failed] + [""])
+
+
+def sweep_table(out, param, rows, failed=()):
     """SWEEP.md under out: each group's figures at every value of param; rows are
-    (value, runs as results.load_runs gives them)."""
+    (value, runs as results.load_runs gives them); failed, (run folder, error) pairs of
+    the failed runs, which the rows leave out."""
     lines = [f"# Sweep over {param}", "",
              "| " + param + " | robot | condition | seeds | first-trial steps | steps per trial (95% CI) "
              "| shrink | goals min / median |", "|---:|---|---|---:|---:|---|---:|---|"]
@@ -322,6 +339,8 @@ def sweep_table(out, param, rows):
             lines.append(f"| {value} | {g['robot']} | {g['condition']} | {g['seeds']} "
                          f"| {_fmt(g['first_trial_steps']['mean'])} | {_fmt(p['mean'])} {_ci(p['ci95'])} "
                          f"| {_fmt(g['shrink'], 2)} | {g['goals']['min']} / {_fmt(g['goals']['median'], 1)} |")
+    if failed:
+        lines += [""] + failed_section({"failed": [{"run": r, "error": e} for r, e in failed]})[:-1]
     path = pathlib.Path(out) / "SWEEP.md"
     results.atomic_write(path, "\n".join(lines) + "\n")
     return path

@@ -4,6 +4,10 @@ DIR/<robot>/<condition>/seed_NNN/ holds config.json (every parameter, versions,
 git commit), trials.csv (one row per trial), trace.npz (positions, int16
 hundredths of a unit) and run.json, written last and atomically: a run folder
 without a complete run.json is unfinished, and a rerun redoes it from scratch.
+
+A run that raised has instead a run.json with status "failed": its parameters, the
+error in one line and the traceback (write_failure). It is never averaged, the
+report names it, and a rerun retries it.
 """
 import csv
 import io
@@ -13,6 +17,7 @@ import pathlib
 import platform
 import subprocess
 import tempfile
+import traceback
 
 import numpy as np
 
@@ -106,6 +111,28 @@ def write_run(root, spec, result, versions_info):
     return run
 
 
+def error_line(error, limit=300):
+    """An exception as one line, 'Type: first line of the message', at most limit chars;
+    for one that wraps the run's own error as .cause (Ray's RayTaskError), that error."""
+    cause = getattr(error, "cause", None)
+    if isinstance(cause, BaseException):
+        error = cause
+    message = str(error).strip().splitlines()
+    line = f"{type(error).__name__}: {message[0]}" if message else type(error).__name__
+    return line if len(line) <= limit else line[: limit - 3] + "..."
+
+
+def write_failure(root, spec, error):
+    """Records a run that raised error: run.json with status "failed", the run's
+    parameters, the error in one line and its traceback (the worker's, when it came
+    from one). Returns the one-line error."""
+    line = error_line(error)
+    record = {"status": "failed", "parameters": spec.parameters(), "error": line,
+              "traceback": "".join(traceback.format_exception(error))}
+    atomic_write(run_dir(root, spec) / "run.json", dumps(record))
+    return line
+
+
 # -- reading -----------------------------------------------------------------------
 def read_run_json(path):
     """The run.json at path, or ResultsError naming the file when it is damaged."""
@@ -114,6 +141,9 @@ def read_run_json(path):
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
         raise ResultsError(f"{path} is corrupted ({type(e).__name__}); "
                            "delete its run folder to rerun it") from None
+    if isinstance(run, dict) and run.get("status") == "failed" and isinstance(
+            run.get("parameters"), dict) and isinstance(run.get("error"), str):
+        return run
     if not isinstance(run, dict) or run.get("status") != "complete" or not isinstance(
             run.get("metrics"), dict) or not isinstance(run.get("parameters"), dict):
         raise ResultsError(f"{path} is corrupted (not a complete run record); "
@@ -122,7 +152,8 @@ def read_run_json(path):
 
 
 def existing(root, spec):
-    """'done' if a matching complete run is on disk, 'missing' if it must run.
+    """'done' if a matching complete run is on disk, 'failed' if a failed one is (it
+    runs again), 'missing' if it must run.
 
     Raises ResultsError when the folder holds a damaged run.json or a complete run
     made with other parameters (never overwritten: use another --out)."""
@@ -130,6 +161,8 @@ def existing(root, spec):
     if not path.exists():
         return "missing"
     run = read_run_json(path)
+    if run["status"] == "failed":
+        return "failed"
     if run["parameters"] != json.loads(json.dumps(spec.parameters())):
         raise ResultsError(f"{path} holds a run made with other parameters "
                            f"(steps {run['parameters'].get('steps')}); use another --out")
@@ -138,20 +171,36 @@ def existing(root, spec):
 
 def load_runs(root, specs=None):
     """Every complete run under root (or only those of specs), as
-    (robot, condition, seed) -> run.json dict."""
+    (robot, condition, seed) -> run.json dict. Failed runs are left out (see
+    failed_runs)."""
     root = pathlib.Path(root)
     if not root.is_dir():
         raise ResultsError(f"no results folder at {root}")
-    runs = {}
+    runs, failed = {}, 0
     paths = (sorted(root.glob("*/*/seed_*/run.json")) if specs is None
              else [run_dir(root, spec) / "run.json" for spec in specs])
     for path in paths:
         run = read_run_json(path)
+        if run["status"] == "failed":
+            failed += 1
+            continue
         p = run["parameters"]
         runs[(p["robot"], p["condition"], p["seed"])] = run
     if not runs:
-        raise ResultsError(f"no complete runs under {root}")
+        raise ResultsError(f"no complete runs under {root}"
+                           + (f" ({failed} failed: rerun `ebrl run` to retry them)" if failed else ""))
     return runs
+
+
+def failed_runs(root):
+    """The failed runs under root, as run folder name (robot/condition/seed_NNN) -> the
+    one-line error recorded in its run.json."""
+    failed = {}
+    for path in sorted(pathlib.Path(root).glob("*/*/seed_*/run.json")):
+        run = read_run_json(path)
+        if run["status"] == "failed":
+            failed[path.parent.relative_to(root).as_posix()] = run["error"]
+    return failed
 
 
 def load_trace(root, robot, condition, seed):

@@ -30,6 +30,8 @@ def arrays(out):
     """Every run's trials.csv text and trace arrays, keyed by run folder."""
     got = {}
     for run in sorted(pathlib.Path(out).glob("*/*/seed_*")):
+        if not (run / "trace.npz").exists():  # a failed run: run.json alone
+            continue
         with np.load(run / "trace.npz") as z:
             got[str(run.relative_to(out))] = ((run / "trials.csv").read_text(),
                                               z["trace"].tobytes(), z["starts"].tobytes())
@@ -97,24 +99,166 @@ def test_ray_backend_gives_the_same_results(clean_run, tmp_path):
     assert arrays(tmp_path / "ray") == arrays(clean_run)
 
 
-def test_kill_then_resume_gives_the_clean_summary(tmp_path):
-    args = ["run", "--robot", "two_wheel", "--condition", "all", "--seeds", "0-2",
-            "--steps", "1500", "--workers", "1", "--no-progress"]
-    ebrl(*args, "--out", tmp_path / "clean")
+KILL_ARGS = ["run", "--robot", "two_wheel", "--condition", "all", "--seeds", "0-2",
+             "--steps", "1500", "--no-progress"]
+
+
+@pytest.fixture(scope="module")
+def kill_clean(tmp_path_factory):
+    out = tmp_path_factory.mktemp("kill_clean") / "clean"
+    ebrl(*KILL_ARGS, "--workers", "1", "--out", out)
+    return out
+
+
+def _default_sigint():
+    # A shell's background job, like this test's own process may be, ignores SIGINT, and a
+    # Python started so ignores Ctrl-C: give the command SIGINT's default, as a terminal does.
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+def start_ebrl(*args):
+    """`ebrl ARGS` in its own process group (so the group can be signalled like a
+    terminal's foreground job), with SIGINT at its default."""
+    return subprocess.Popen([sys.executable, "-m", "experiments", *map(str, args)], cwd=ROOT,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True, preexec_fn=_default_sigint)
+
+
+def wait_for_runs(out, count, proc, timeout=120):
+    deadline = time.time() + timeout
+    while (time.time() < deadline and proc.poll() is None
+           and len(list(out.glob("*/*/seed_*/run.json"))) < count):
+        time.sleep(0.02)
+    return len(list(out.glob("*/*/seed_*/run.json")))
+
+
+def children(pid):
+    """The live (not zombie) processes whose parent is pid, as pid -> command line."""
+    found = {}
+    for entry in pathlib.Path("/proc").iterdir():
+        try:
+            stat = (entry / "stat").read_text()
+            state, ppid = stat.rsplit(")", 1)[1].split()[:2]
+            if int(ppid) == pid and state != "Z":
+                found[int(entry.name)] = (entry / "cmdline").read_bytes().replace(b"\0", b" ")
+        except (OSError, ValueError):
+            continue
+    return found
+
+
+def alive(pid):
+    try:
+        state = pathlib.Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+@pytest.mark.parametrize("moment,workers", [
+    ("starting", 2),   # while it imports and starts the pool: nothing on disk yet
+    ("running", 1),    # between runs, two on disk
+    ("running", 2),    # with the spawn pool's workers busy
+    ("reporting", 2),  # every run on disk, the report being built
+])
+def test_kill_then_resume_gives_the_clean_summary(kill_clean, tmp_path, moment, workers):
+    args = [*KILL_ARGS, "--workers", workers, "--out", tmp_path / "killed"]
     out = tmp_path / "killed"
-    proc = subprocess.Popen([sys.executable, "-m", "experiments", *args, "--out", str(out)],
-                            cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                            start_new_session=True)
-    deadline = time.time() + 120
-    while time.time() < deadline and len(list(out.glob("*/*/seed_*/run.json"))) < 2:
-        time.sleep(0.05)
-    os.killpg(proc.pid, signal.SIGKILL)
-    proc.wait()
+    proc = start_ebrl(*args)
+    if moment == "starting":
+        time.sleep(0.5)
+    else:
+        wait_for_runs(out, 2 if moment == "running" else 6, proc)
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except ProcessLookupError:  # it had finished
+        pass
+    proc.communicate()
     done = len(list(out.glob("*/*/seed_*/run.json")))
-    assert 2 <= done < 6, done
-    ebrl(*args, "--out", out)
-    assert summary(out) == summary(tmp_path / "clean")
-    assert arrays(out) == arrays(tmp_path / "clean")
+    if moment != "reporting":
+        assert proc.returncode == -signal.SIGKILL
+    if moment == "running":
+        assert 2 <= done < 6, done
+    proc = ebrl(*args)
+    assert proc.stdout.strip().startswith(f"{6 - done} runs made, {done} already on disk")
+    assert summary(out) == summary(kill_clean)
+    assert arrays(out) == arrays(kill_clean)
+
+
+def test_ctrl_c_stops_the_workers_in_one_line_and_the_command_resumes(kill_clean, tmp_path):
+    out = tmp_path / "interrupted"
+    args = [*KILL_ARGS, "--workers", "2", "--out", out]
+    proc = start_ebrl(*args)
+    wait_for_runs(out, 1, proc)
+    workers = {pid: cmd for pid, cmd in children(proc.pid).items() if b"spawn_main" in cmd}
+    assert workers, "no spawn worker found"
+    os.killpg(proc.pid, signal.SIGINT)  # as Ctrl-C at a terminal: the whole group
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130, err
+    assert len(err.strip().splitlines()) == 1 and "interrupted" in err, err
+    assert "Traceback" not in err
+    deadline = time.time() + 5
+    while time.time() < deadline and any(alive(pid) for pid in workers):
+        time.sleep(0.05)
+    assert not [pid for pid in workers if alive(pid)], "workers left running"
+    done = len(list(out.glob("*/*/seed_*/run.json")))
+    assert 1 <= done < 6, done
+    # No run folder holds a failed record: an interrupted run is simply unfinished.
+    assert all(json.loads(p.read_text())["status"] == "complete"
+               for p in out.glob("*/*/seed_*/run.json"))
+    proc = ebrl(*args)
+    assert proc.stdout.strip().startswith(f"{6 - done} runs made, {done} already on disk")
+    assert summary(out) == summary(kill_clean)
+    assert arrays(out) == arrays(kill_clean)
+
+
+def test_a_failed_run_is_recorded_named_never_averaged_and_retried(clean_run, tmp_path):
+    out = tmp_path / "results"
+    failing = "two_wheel/avoidance/seed_001"
+    env = dict(os.environ, EBRL_TEST_FAIL="two_wheel/avoidance/1")  # test-only hook
+    proc = ebrl("run", *SMALL, "--workers", "2", "--out", out, env=env, check=False)
+    assert proc.returncode == 1, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and failing in lines[0] and "PhysicsError" in lines[0], proc.stderr
+    assert "7 runs made, 0 already on disk" in lines[0] and "Traceback" not in proc.stderr
+    # The record: status, parameters, the error in one line and the worker's traceback.
+    record = json.loads((out / failing / "run.json").read_text())
+    assert record["status"] == "failed"
+    assert record["parameters"]["seed"] == 1 and record["parameters"]["steps"] == 400
+    assert record["error"].startswith("PhysicsError: ") and "\n" not in record["error"]
+    assert "PhysicsError" in record["traceback"] and "_execute" in record["traceback"]
+    # The other runs finished, identical to the clean run's.
+    others = {k: v for k, v in arrays(clean_run).items() if k != failing}
+    assert {k: v for k, v in arrays(out).items() if k != failing} == others
+    # The report names it and never averages it.
+    s = summary(out)
+    assert s["failed"] == [{"run": failing, "error": record["error"]}]
+    group = next(g for g in s["groups"] if (g["robot"], g["condition"]) == ("two_wheel", "avoidance"))
+    assert group["seeds"] == 1
+    proc = ebrl("report", out, check=False)
+    assert proc.returncode == 1 and failing in proc.stderr and "Traceback" not in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
+    report = (out / "REPORT.md").read_text()
+    assert "Failed runs: 1, not averaged" in report and failing in report
+    # A rerun without the hook retries it alone, and the summary is a clean run's.
+    proc = ebrl("run", *SMALL, "--workers", "2", "--out", out)
+    assert "1 runs made, 7 already on disk" in proc.stdout and proc.stderr.strip() == ""
+    assert summary(out) == summary(clean_run)
+    assert arrays(out) == arrays(clean_run)
+    assert "Failed runs" not in (out / "REPORT.md").read_text()
+
+
+def test_a_worker_that_dies_fails_only_its_own_run(clean_run, tmp_path):
+    out = tmp_path / "results"
+    dying = "two_wheel/random/seed_000"
+    env = dict(os.environ, EBRL_TEST_CRASH="two_wheel/random/0")  # test-only hook
+    proc = ebrl("run", *SMALL, "--workers", "2", "--out", out, env=env, check=False)
+    assert proc.returncode == 1 and dying in proc.stderr and "WorkerDied" in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1 and "Traceback" not in proc.stderr
+    assert json.loads((out / dying / "run.json").read_text())["status"] == "failed"
+    assert {k: v for k, v in arrays(out).items() if k != dying} == {
+        k: v for k, v in arrays(clean_run).items() if k != dying}
+    ebrl("run", *SMALL, "--workers", "2", "--out", out)
+    assert summary(out) == summary(clean_run)
 
 
 @pytest.mark.parametrize("args,message", [

@@ -1,0 +1,152 @@
+"""Checks of the command line's values, made before any work and before any heavy
+import (numpy at most): a bad value is one line on stderr, exit status 2, nothing
+written. Each check returns the value or raises ValueError with that line.
+
+The limits below are documented in the README and in `ebrl run --help`.
+"""
+import math
+import os
+import pathlib
+import tempfile
+
+#: Seeds run from 0 to MAX_SEED, and one command takes at most MAX_SEEDS of them.
+MAX_SEED = 999_999
+MAX_SEEDS = 10_000
+#: Agent steps of one run (the paper's budgets are 30,000 and 100,000).
+MAX_STEPS = 10_000_000
+MAX_WORKERS = 1024
+#: `ebrl bench`: timed steps per block, and blocks.
+MAX_BENCH_STEPS = 1_000_000
+MAX_BENCH_BLOCKS = 1_000
+#: The agent's memory_size through --set (Table 1: 1024 and 4096); the agent allocates
+#: its whole memory up front, so a huge value would exhaust RAM in every worker.
+MAX_MEMORY_SIZE = 1_000_000
+
+
+def seeds(text):
+    """'0-49', '7' or '1,3,5' -> sorted list of seeds; refuses before expanding a range
+    past MAX_SEED, and more than MAX_SEEDS seeds."""
+    chosen = set()
+    for part in text.split(","):
+        lo, sep, hi = part.strip().partition("-")
+        try:
+            lo = int(lo)
+            hi = int(hi) if sep else lo
+        except ValueError:
+            raise ValueError(f"bad seed range {text!r} (use e.g. 0-49, 3 or 1,4,9)") from None
+        if lo < 0:
+            raise ValueError("seeds must be non-negative")
+        if hi < lo:
+            raise ValueError(f"reversed seed range {part.strip()!r}")
+        if hi > MAX_SEED:
+            raise ValueError(f"seeds go up to {MAX_SEED:,}, got {hi:,}")
+        if hi - lo + 1 > MAX_SEEDS:
+            raise ValueError(f"at most {MAX_SEEDS:,} seeds in one command, got {hi - lo + 1:,}")
+        chosen.update(range(lo, hi + 1))  # at most MAX_SEED + 1 numbers
+        if len(chosen) > MAX_SEEDS:
+            raise ValueError(f"at most {MAX_SEEDS:,} seeds in one command, got more in {text!r}")
+    return sorted(chosen)
+
+
+def integer(text, lo, hi):
+    """An integer from lo to hi (inclusive)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise ValueError(f"not an integer: {text!r}") from None
+    if value < lo:
+        raise ValueError(f"must be positive, got {value}" if lo == 1
+                         else f"must be at least {lo:,}, got {value}")
+    if value > hi:
+        raise ValueError(f"must be at most {hi:,}, got {value:,}")
+    return value
+
+
+def number(kind, name, text):
+    """text as kind (int or float) for the agent parameter name; floats must be finite."""
+    try:
+        value = kind(text)
+    except ValueError:
+        raise ValueError(f"bad value for {name}: {text!r} (not {'an integer' if kind is int else 'a number'})") from None
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ValueError(f"bad value for {name}: {text!r} (not a finite number)")
+    return value
+
+
+def agent_configs(robots, overrides, drive=None):
+    """Builds each robot's agent config (its Table 1 column) with overrides once, here,
+    so that a value the config refuses (ebrl.Config.__post_init__) stops the command
+    before any run."""
+    import ebrl
+    from tasks.robots import resolve
+    overrides = dict(overrides)
+    size = overrides.get("memory_size")
+    if size is not None and size > MAX_MEMORY_SIZE:
+        raise ValueError(f"memory_size must be at most {MAX_MEMORY_SIZE:,}, got {size:,}")
+    for robot in robots:
+        try:
+            ebrl.paper_config(resolve(robot, drive).table1, **overrides)
+        except (TypeError, ValueError) as e:
+            shown = " ".join(f"{k}={v}" for k, v in sorted(overrides.items()))
+            raise ValueError(f"agent parameters {shown} for {robot}: {e}") from None
+
+
+def _can_create_in(folder):
+    """Whether a file can be made in folder. Probed with an unnamed temporary file
+    (O_TMPFILE where the system has it), so the probe leaves nothing behind; os.access
+    alone says yes to root even on a read-only or virtual file system."""
+    if not os.access(folder, os.W_OK | os.X_OK):
+        return False
+    try:
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError:
+        return False
+    return True
+
+
+def _parent_folder(path, option):
+    parent = path.parent
+    if not parent.is_dir():
+        what = "is not a folder" if parent.exists() else "does not exist"
+        raise ValueError(f"{option} {path}: {parent} {what}")
+    if not _can_create_in(parent):
+        raise ValueError(f"{option} {path}: cannot write in {parent}")
+    return parent
+
+
+def output_folder(path, option):
+    """A folder the command writes into: an existing, writable folder, or a new one
+    whose parent folder exists and is writable (missing parents are never made)."""
+    path = pathlib.Path(path)
+    if path.exists() or path.is_symlink():
+        if not path.is_dir():
+            raise ValueError(f"{option} {path} exists and is not a folder")
+        if not _can_create_in(path):
+            raise ValueError(f"{option} {path}: cannot write in it")
+    else:
+        _parent_folder(path, option)
+    return path
+
+
+def output_file(path, option, suffix=None):
+    """A file the command writes: not a folder, in an existing writable folder."""
+    path = pathlib.Path(path)
+    if suffix is not None and path.suffix.lower() != suffix:
+        raise ValueError(f"{option} must end in {suffix}, got {path}")
+    if path.is_dir():
+        raise ValueError(f"{option} {path} is a folder")
+    _parent_folder(path, option)
+    return path
+
+
+def results_folder(path, option="", writable=False):
+    """An existing folder of results; writable when the command writes its report."""
+    path = pathlib.Path(path)
+    if not path.is_dir():
+        prefix = f"{option}: " if option else ""
+        raise ValueError(f"{prefix}no results folder at {path}"
+                         + (" (it is a file)" if path.exists() else ""))
+    if writable and not _can_create_in(path):
+        raise ValueError(f"cannot write the report in {path}")
+    return path
