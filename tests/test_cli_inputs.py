@@ -18,6 +18,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 LIMIT_S = 10.0
 BIG = "99999999999"
 HUGE = "9" * 40
+ROBOT_FILE = str(pathlib.Path(__file__).resolve().parents[1] / "models" / "two_wheel.xml")
 RENDER = ["render", "--robot", "two_wheel", "--condition", "avoidance"]
 REPORT_OK = ["report", "empty_dir"]  # a folder that passes the folder checks
 
@@ -119,7 +120,16 @@ CASES = [
     (["bench", "--blocks", "0"], "positive"),
     (["bench", "--blocks", "nan"], "not an integer"),
     (["bench", "--blocks", "99999999"], "at most 1,000"),
-    (["bench", "--robot", "two_wheel"], "unrecognized arguments"),
+    (["bench", "--robot", "tricycle"], "tricycle"),
+    (["bench", "--what"], "unrecognized arguments"),
+    (["check", "--robot", "tricycle"], "tricycle"),
+    (["check", "--actions", "0"], "positive"),
+    (["run", "--robot", "my_robot.xml"], "no robot file"),
+    (["run", "--robot", ROBOT_FILE], "needs a drive"),
+    (["run", "--robot", ROBOT_FILE, "--drive", "hover"], "hover"),
+    (["run", "--robot", "two_wheel", "--drive", "floating"], "has the two_wheel drive"),
+    (["render", "--robot", "two_wheel,floating", "--condition", "avoidance", "--seed", "0",
+      "--out", "v.mp4"], "one robot"),
     # demo and the command itself
     (["demo", "--out", "a_file"], "not a folder"),
     (["demo", "--workers", "-1"], "positive"),

@@ -80,8 +80,9 @@ def test_sensors_once_per_step_read_as_sensors_every_substep():
 
 
 def test_planar_trajectories_unchanged_by_the_registry():
-    """The first 3,000 steps of seeds 0-1, every paper robot and condition, as the run
-    behind RESULTS.md (protocol version 2) made them."""
+    """The first 3,000 steps of seeds 0-1, every paper robot and condition, as the full
+    run behind RESULTS.md made them (tests/data/planar_traces_v<PROTOCOL_VERSION>.npz; the
+    registry, the 3D room and the compiled agent left these steps as protocol 2's)."""
     with np.load(ROOT / "tests" / "data" / f"planar_traces_v{protocol.PROTOCOL_VERSION}.npz") as z:
         expected = {k: z[k] for k in z.files}
     for key, trace in expected.items():
