@@ -103,17 +103,14 @@ def _choice(valid):
 
 
 def _override(text):
-    """name=value for an agent parameter (sweeps), e.g. policy_threshold=0.05."""
-    import dataclasses
-
-    import ebrl
+    """name=value for a field of the agent's config (ebrl.Config) or the task's
+    (tasks.TaskConfig), e.g. policy_threshold=0.05 or bump=slide."""
     name, sep, value = text.partition("=")
-    fields = {f.name: f for f in dataclasses.fields(ebrl.Config)}
-    if not sep or name not in fields:
+    kinds = validate.setting_kinds()
+    if not sep or name not in kinds:
         raise argparse.ArgumentTypeError(f"bad --set {text!r}; use NAME=VALUE with NAME one of "
-                                         + ", ".join(fields))
-    kind = type(getattr(ebrl.Config(), name))
-    return name, _argument(lambda v: validate.number(kind, name, v))(value)
+                                         + ", ".join(kinds))
+    return name, _argument(lambda v: validate.number(kinds[name], name, v))(value)
 
 
 def build_parser():
@@ -184,6 +181,22 @@ def build_parser():
                    help="a run folder (e.g. results) whose runs at the default value join the "
                         "table, for the same robots, conditions, seeds and budgets")
     w.add_argument("--no-progress", action="store_true")
+
+    a = sub.add_parser("ablate", help="the readings ablation: one reading changed at a time")
+    _robot_args(a, "paper")
+    a.add_argument("--seeds", type=parse_seeds, default=list(range(10)))
+    a.add_argument("--steps", type=_up_to(validate.MAX_STEPS), default=None)
+    a.add_argument("--readings", default="all",
+                   help="comma-separated reading names (default: all of them)")
+    a.add_argument("--combo", action="append", default=[], metavar="NAME=VALUE,NAME=VALUE",
+                   help="a cell with several readings changed together (repeatable)")
+    a.add_argument("--workers", type=_up_to(validate.MAX_WORKERS), default=os.cpu_count() or 1)
+    a.add_argument("--out", type=pathlib.Path, default=pathlib.Path("ablation"))
+    a.add_argument("--baseline", type=pathlib.Path, default=None,
+                   help="a run folder (e.g. results) whose default runs are the default cell")
+    a.add_argument("--results", type=pathlib.Path, default=None, metavar="RESULTS.md",
+                   help="also regenerate this page's Ablation block")
+    a.add_argument("--no-progress", action="store_true")
 
     d = sub.add_parser("demo", help="a quick protocol, its report and one video")
     d.add_argument("--out", type=pathlib.Path, default=pathlib.Path("demo_results"))
@@ -347,10 +360,7 @@ def cmd_check(args):
 def _sweep_values(args):
     """--param and --values as (name, value) pairs, each value distinct and accepted by
     ebrl.Config for the selected robots."""
-    import dataclasses
-
-    import ebrl
-    fields = [f.name for f in dataclasses.fields(ebrl.Config)]
+    fields = list(validate.setting_kinds())
     if args.param not in fields:
         raise ValueError(f"unknown --param {args.param!r}; one of {', '.join(fields)}")
     try:
@@ -370,7 +380,6 @@ def _sweep_values(args):
 
 
 def cmd_sweep(args):
-    import ebrl
     try:
         _check_robots(args)
         values = _sweep_values(args)
@@ -399,7 +408,7 @@ def cmd_sweep(args):
             if _report_if_any(folder, ran) is not None:
                 rows.append((v, results.load_runs(folder)))
         if baseline is not None:
-            default = getattr(ebrl.Config(), args.param)
+            default = validate.setting_default(args.param)
             rows = sorted(rows + [(default, baseline)], key=lambda row: row[0])
             rows = [(f"{v} (default, {args.baseline})" if runs is baseline else v, runs)
                     for v, runs in rows]
@@ -415,6 +424,49 @@ def cmd_sweep(args):
 
 DEMO_SEEDS = 6
 DEMO_VIDEO_STEPS = 3_000
+
+
+def cmd_ablate(args):
+    from experiments import ablation
+    try:
+        _check_robots(args)
+        names = [r.name for r in ablation.READINGS] if args.readings == "all" else \
+            [n.strip() for n in args.readings.split(",") if n.strip()]
+        unknown = [n for n in names if n not in ablation.BY_NAME]
+        if unknown or not names:
+            raise ValueError(f"unknown reading {unknown[0] if unknown else args.readings!r}; "
+                             f"valid: {', '.join(ablation.BY_NAME)}")
+        combos = []
+        for text in args.combo:
+            combo = [_argument(lambda t: _override(t))(part.strip()) for part in text.split(",")]
+            _check_agent(args, combo)
+            combos.append(combo)
+        for r in (ablation.BY_NAME[n] for n in names):
+            for value in r.values[1:]:
+                _check_agent(args, [(r.name, value)])
+        validate.output_folder(args.out, "--out")
+        if args.baseline is not None:
+            validate.results_folder(args.baseline, "--baseline")
+        if args.results is not None:
+            validate.output_file(args.results, "--results")
+    except (ValueError, argparse.ArgumentTypeError) as e:
+        return _fail(str(e))
+    from experiments import results
+    readings = [ablation.BY_NAME[n] for n in names]
+    try:
+        cell_runs, failed = ablation.run(args.out, _selected_robots(args), args.seeds,
+                                         args.steps, readings, combos, args.baseline,
+                                         args.workers, not args.no_progress)
+        path = ablation.write(args.out, ablation.summarize(cell_runs), failed)
+        if args.results is not None:
+            print(f"published: {ablation.publish(args.out, args.results)}")
+    except results.ResultsError as e:
+        return _fail(str(e))
+    if failed:
+        return _fail(f"{_failed_line(failed)}; recorded in run.json, not averaged; "
+                     f"ablation: {path}; rerun the same command to retry", RUNS_FAILED)
+    print(f"ablation: {path}")
+    return 0
 
 
 def cmd_demo(args):
@@ -450,7 +502,8 @@ def main(argv=None):
         args = build_parser().parse_args(argv)
         return {"robots": cmd_robots, "run": cmd_run, "report": cmd_report,
                 "render": cmd_render, "bench": cmd_bench, "check": cmd_check,
-                "sweep": cmd_sweep, "demo": cmd_demo}[args.command](args)
+                "sweep": cmd_sweep, "ablate": cmd_ablate,
+                "demo": cmd_demo}[args.command](args)
     except KeyboardInterrupt:
         print("ebrl: interrupted; finished runs are kept, rerun to resume", file=sys.stderr)
         return INTERRUPTED

@@ -48,7 +48,16 @@ class RunSpec:
         return f"{self.label}/{self.condition}/seed_{self.seed:03d}"
 
     def agent_config(self):
-        return ebrl.paper_config(self.entry.table1, **dict(self.overrides))
+        """Table 1's column for the robot, with the overrides that name agent fields."""
+        fields = {f.name for f in dataclasses.fields(ebrl.Config)}
+        return ebrl.paper_config(self.entry.table1,
+                                 **{k: v for k, v in self.overrides if k in fields})
+
+    def task_config(self):
+        """The paper's task, with the overrides that name task fields."""
+        from tasks.config import TaskConfig
+        fields = {f.name for f in dataclasses.fields(TaskConfig)}
+        return TaskConfig(**{k: v for k, v in self.overrides if k in fields})
 
     def parameters(self):
         """Everything that determines the run's result; a rerun matches on this."""
@@ -64,32 +73,21 @@ class RunSpec:
             "agent": dataclasses.asdict(self.agent_config()),
             "avoidance": entry.avoidance,
             "modalities": [list(m) for m in entry.modalities],
-            "task": task_parameters(),
-            "model_sha256": model_digest(entry),
+            "task": dataclasses.asdict(self.task_config()),
+            "model_sha256": model_digest(entry, self.task_config()),
         }
 
 
 @functools.cache
-def model_digest(entry):
-    """A digest of the composed MJCF with the entry's options, so results made with
-    another model never match. Computed once per process (composing takes milliseconds,
-    and every spec asks)."""
+def model_digest(entry, task_config):
+    """A digest of the composed MJCF with the entry's options and the task config's edits,
+    so results made with another model never match. Computed once per process and model
+    (composing takes milliseconds, and every spec asks)."""
     import hashlib
 
     import tasks
-    _, spec = tasks.compile_robot(entry)
+    _, spec = tasks.compile_robot(entry, task_config)
     return hashlib.sha256(spec.to_xml().encode()).hexdigest()[:16]
-
-
-def task_parameters():
-    from tasks import navigation
-    return {
-        "sensor_noise": navigation.SENSOR_NOISE,
-        "action_noise": navigation.ACTION_NOISE,
-        "start_jitter_xy": navigation.START_JITTER_XY,
-        "start_jitter_heading": navigation.START_JITTER_HEADING,
-        "sensor_range": navigation.SENSOR_RANGE,
-    }
 
 
 def seeds_for(seed):
@@ -155,7 +153,7 @@ def execute(spec, on_step=None):
     import tasks
 
     env_seed, _ = seeds_for(spec.seed)
-    env = tasks.load(spec.entry, seed=env_seed)
+    env = tasks.load(spec.entry, seed=env_seed, config=spec.task_config())
     agent = make_agent(spec, env)
     keys = tuple(key for key, _ in spec.entry.modalities)
     # trace[k]: the position after step k (k = 0: the first start); starts[i]: the

@@ -258,14 +258,21 @@ def publish(root, results_md, figures_dir):
     for png in sorted((root / "figures").glob("*.png")):
         block += [f"![{png.stem}]({rel}/{png.name})", ""]
     block.append(END)
-    text = results_md.read_text() if results_md.exists() else f"# Results\n\n{BEGIN}\n{END}\n"
-    if BEGIN not in text or END not in text:
-        text = text.rstrip() + f"\n\n{BEGIN}\n{END}\n"
-    head, rest = text.split(BEGIN, 1)
-    tail = rest.split(END, 1)[1]
-    results.atomic_write(results_md, head + "\n".join(block) + tail)
+    replace_block(results_md, BEGIN, END, block)
     results.atomic_write(results_md.parent / "summary.json", results.dumps(summary))
     return results_md
+
+
+def replace_block(path, begin, end, block):
+    """Writes the lines `block` (which start with begin and end with end) over the text
+    between the markers in path, keeping the rest; appends them if a marker is missing."""
+    path = pathlib.Path(path)
+    text = path.read_text() if path.exists() else f"# Results\n\n{begin}\n{end}\n"
+    if begin not in text or end not in text:
+        text = text.rstrip() + f"\n\n{begin}\n{end}\n"
+    head, rest = text.split(begin, 1)
+    tail = rest.split(end, 1)[1]
+    results.atomic_write(path, head + "\n".join(block) + tail)
 
 
 def optimal_table(rows):

@@ -62,8 +62,41 @@ def integer(text, lo, hi):
     return value
 
 
+def setting_kinds():
+    """Every --set name, the agent's (ebrl.Config) then the task's (tasks.TaskConfig),
+    with the type its value takes (a field whose default is None takes a number)."""
+    import dataclasses
+
+    import ebrl
+    from tasks.config import TaskConfig
+    kinds = {}
+    for cls in (ebrl.Config, TaskConfig):
+        default = cls()
+        for f in dataclasses.fields(cls):
+            value = getattr(default, f.name)
+            kinds[f.name] = float if value is None else type(value)
+    return kinds
+
+
+def setting_default(name):
+    """The default value of a --set name (the agent's or the task's)."""
+    import ebrl
+    from tasks.config import TaskConfig
+    for cls in (ebrl.Config, TaskConfig):
+        if hasattr(cls(), name):
+            return getattr(cls(), name)
+    raise ValueError(f"unknown setting {name!r}")
+
+
 def number(kind, name, text):
-    """text as kind (int or float) for the agent parameter name; floats must be finite."""
+    """text as kind (int, float, bool or str) for the setting name; floats must be
+    finite, booleans are true or false."""
+    if kind is bool:
+        if text.lower() not in ("true", "false"):
+            raise ValueError(f"bad value for {name}: {text!r} (true or false)")
+        return text.lower() == "true"
+    if kind is str:
+        return text
     try:
         value = kind(text)
     except ValueError:
@@ -83,6 +116,17 @@ def agent_configs(robots, overrides, drive=None):
     size = overrides.get("memory_size")
     if size is not None and size > MAX_MEMORY_SIZE:
         raise ValueError(f"memory_size must be at most {MAX_MEMORY_SIZE:,}, got {size:,}")
+    import dataclasses
+
+    from tasks.config import TaskConfig
+    task_fields = {f.name for f in dataclasses.fields(TaskConfig)}
+    task = {k: v for k, v in overrides.items() if k in task_fields}
+    overrides = {k: v for k, v in overrides.items() if k not in task_fields}
+    try:
+        TaskConfig(**task)
+    except (TypeError, ValueError) as e:
+        shown = " ".join(f"{k}={v}" for k, v in sorted(task.items()))
+        raise ValueError(f"task parameters {shown}: {e}") from None
     for robot in robots:
         try:
             ebrl.paper_config(resolve(robot, drive).table1, **overrides)

@@ -3,6 +3,7 @@
 `tasks.load(robot, ...)` takes a registered robot name (`tasks.ROBOTS`) or a path to a
 robot file with `drive="two_wheel"` or `drive="floating"`.
 """
+import dataclasses
 import gc
 
 import models  # first: it picks the headless OpenGL backend before dm_control loads
@@ -13,17 +14,19 @@ from dm_control.mujoco import wrapper  # noqa: E402
 from dm_control.rl import control  # noqa: E402
 
 from tasks import floating, navigation, two_wheel  # noqa: E402
+from tasks.config import TaskConfig  # noqa: E402
 from tasks.robots import DRIVES, PAPER_ROBOTS, ROBOTS, Robot, resolve  # noqa: E402
 
-__all__ = ["load", "compile_robot", "ROBOTS", "PAPER_ROBOTS", "DRIVES", "Robot", "resolve"]
+__all__ = ["load", "compile_robot", "TaskConfig", "ROBOTS", "PAPER_ROBOTS", "DRIVES", "Robot", "resolve"]
 
 # drive -> (Task class, Physics classes by the actuator that marks them, substeps the
-# Environment runs per agent step)
+# Environment runs per agent step, the task config's edit of the model spec)
 _DRIVES = {
     "two_wheel": (two_wheel.TwoWheel, {"left_wheel": two_wheel.WheelPhysics,
                                        "forward": two_wheel.Physics},
-                  two_wheel.move_substeps),
-    "floating": (floating.Floating, {"thrust_x": floating.Physics}, floating.move_substeps),
+                  two_wheel.move_substeps, navigation.edit_model),
+    "floating": (floating.Floating, {"thrust_x": floating.Physics}, floating.move_substeps,
+                 floating.edit_model),
 }
 
 
@@ -40,9 +43,11 @@ class Environment(control.Environment):
             physics.free()
 
 
-def compile_robot(entry):
-    """(MjModel, MjSpec) of the room with the registry entry's robot."""
+def compile_robot(entry, config=TaskConfig()):
+    """(MjModel, MjSpec) of the room with the registry entry's robot, and the task
+    config's changes to the model: the robot's radius, the floating bump's walls."""
     spec = models.compose(entry.model, timestep=entry.timestep, integrator=entry.integrator)
+    _DRIVES[entry.drive][3](spec, config)
     try:
         return spec.compile(), spec
     except ValueError as e:
@@ -50,13 +55,14 @@ def compile_robot(entry):
                          f"{str(e).splitlines()[0]}") from None
 
 
-def load(robot, *, drive=None, seed=None, sensor_noise=navigation.SENSOR_NOISE,
-         action_noise=navigation.ACTION_NOISE, start_jitter=True):
+def load(robot, *, drive=None, seed=None, config=None, **fields):
     """The navigation environment for `robot`: a name in tasks.ROBOTS, or a path to a
-    robot file with drive "two_wheel" or "floating"."""
+    robot file with drive "two_wheel" or "floating". config: a TaskConfig (default: the
+    paper's); fields: TaskConfig fields to change (sensor_noise=0.0, bump="slide", ...)."""
     entry = robot if isinstance(robot, Robot) else resolve(robot, drive)
-    task_cls, physics_classes, n_sub_steps = _DRIVES[entry.drive]
-    model, _ = compile_robot(entry)
+    config = dataclasses.replace(config or TaskConfig(), **fields)
+    task_cls, physics_classes, n_sub_steps, _ = _DRIVES[entry.drive]
+    model, _ = compile_robot(entry, config)
     names = {mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, i)
              for i in range(model.nu)}
     physics_cls = next((cls for act, cls in physics_classes.items()
@@ -65,8 +71,6 @@ def load(robot, *, drive=None, seed=None, sensor_noise=navigation.SENSOR_NOISE,
         physics = physics_cls.from_model(wrapper.MjModel(model))
     except navigation.ContractError as e:
         raise navigation.ContractError(f"robot file {entry.model}: {e}") from None
-    task = task_cls(sensor_noise=sensor_noise, action_noise=action_noise,
-                    start_jitter=start_jitter, time_scale=entry.time_scale,
-                    random=np.random.RandomState(seed))
+    task = task_cls(config, time_scale=entry.time_scale, random=np.random.RandomState(seed))
     return Environment(physics, task, n_sub_steps=n_sub_steps(physics.timestep, entry.time_scale),
                        time_limit=float("inf"))

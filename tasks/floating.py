@@ -8,6 +8,7 @@ actuators ``thrust_x`` and ``thrust_y`` push along the world's x and y axes
 """
 import mujoco
 
+import models
 from models import UNIT
 from tasks import navigation
 
@@ -18,8 +19,20 @@ MAX_ACCELERATION = 0.2  # units per step, per step
 STEP_SECONDS = 0.5
 
 
+def edit_model(spec, config):
+    """The radius (navigation.edit_model) and the walls of the bump reading: "slide" and
+    "bounce" make the bumper frictionless (condim 1); "grip" and "stop" keep its file's."""
+    navigation.edit_model(spec, config)
+    if config.bump in ("slide", "bounce"):
+        hull = spec.geom(models.PREFIX + "hull")
+        if hull is not None:
+            hull.condim = 1
+
+
 class Physics(navigation.Physics):
-    """Adds the thrusters, as force motors along the world's x and y."""
+    """Adds the thrusters, as force motors along the world's x and y; and, for the bump
+    readings "stop" and "bounce", the velocity change at a contact, applied after each
+    substep (the coast then runs one substep at a time in Python)."""
 
     def _reload_from_data(self, data):
         super()._reload_from_data(data)
@@ -33,6 +46,61 @@ class Physics(navigation.Physics):
             raise navigation.ContractError(
                 "the floating drive needs 8 rangefinders (E, NE, N, NW, W, SW, S, SE; eq 10)")
         self._mass = float(m.body_subtreemass[self._base])
+        self._hull = navigation._id(m, mujoco.mjtObj.mjOBJ_GEOM, "hull")
+        #: The bump reading applied after each substep: None ("grip", "slide": the
+        #: contact's physics alone), "stop" or "bounce"; set by the task.
+        self.bump = None
+
+    def _hull_contact(self):
+        """The contact normal pointing from the wall into the robot, or None."""
+        data = self.data.ptr
+        for k in range(data.ncon):
+            c = data.contact[k]
+            if c.geom1 == self._hull:
+                return -c.frame[:3]
+            if c.geom2 == self._hull:
+                return c.frame[:3].copy()
+        return None
+
+    def step(self, nstep=1):
+        """Substeps; with "stop" or "bounce", a substep that brings the bumper into a wall
+        while moving towards it is undone (no contact forces act, nothing sinks in), and
+        the velocity becomes 0 ("stop") or its mirror image off the wall ("bounce")."""
+        if self.bump is None:
+            return super().step(nstep)
+        qpos, qvel = self._qpos, self._qvel
+        for _ in range(nstep):
+            qpos0, qvel0 = qpos.copy(), qvel.copy()
+            super().step(1)
+            normal = self._hull_contact()
+            if normal is None:
+                continue
+            vx, vy = self._planar_velocity(qvel0)
+            into = vx * normal[0] + vy * normal[1]
+            if into >= 0:  # touching while moving away: the contact's physics alone
+                continue
+            qpos[:] = qpos0
+            if self.bump == "stop":
+                qvel[:] = 0.0
+            else:
+                self._set_planar_velocity(vx - 2 * into * normal[0], vy - 2 * into * normal[1])
+            self.forward()
+
+    def _planar_velocity(self, qvel):
+        if self._free is not None:
+            return qvel[self._free_dof], qvel[self._free_dof + 1]  # a free joint's dofs start with x, y
+        m = self.model
+        return (qvel[m.jnt_dofadr[self.base_joints["x"]]], qvel[m.jnt_dofadr[self.base_joints["y"]]])
+
+    def _set_planar_velocity(self, vx, vy):
+        qvel = self._qvel
+        qvel[:] = 0.0
+        if self._free is not None:
+            qvel[self._free_dof], qvel[self._free_dof + 1] = vx, vy
+        else:
+            m = self.model
+            qvel[m.jnt_dofadr[self.base_joints["x"]]] = vx
+            qvel[m.jnt_dofadr[self.base_joints["y"]]] = vy
 
     def set_robot_pose(self, x, y, heading=0.0):
         """Places the robot at (x, y), at rest, heading 0 whatever is asked: a floating
@@ -52,6 +120,7 @@ class Floating(navigation.Navigation):
 
     def initialize_episode(self, physics):
         physics.step_seconds = substeps(physics.timestep, self.time_scale) * physics.timestep
+        physics.bump = self.config.bump if self.config.bump in ("stop", "bounce") else None
         super().initialize_episode(physics)
 
     def get_observation(self, physics):

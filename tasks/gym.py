@@ -6,8 +6,9 @@
     obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
 
 `gymnasium.make("tasks.gym:EBRL/TwoWheel-v0")` imports this module itself. Options of
-`tasks.load` pass through: `sensor_noise`, `action_noise`, `start_jitter`; and
-`max_episode_steps` (default: the robot's budget of Section 3.6).
+`tasks.load` pass through: any field of tasks.TaskConfig (`sensor_noise`, `action_noise`,
+`start_jitter`, `bump`, ...); and `max_episode_steps` (default: the robot's budget of
+Section 3.6).
 
 A thin adapter of our dm_env tasks rather than Shimmy's dm_control converter: reset(seed)
 must reseed the task's own random stream (start jitter, sensor and action noise) to
@@ -44,17 +45,12 @@ class NavigationEnv(gymnasium.Env):
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": None}  # set per instance
 
-    def __init__(self, robot, *, render_mode=None, sensor_noise=None, action_noise=None,
-                 start_jitter=True, drive=None):
+    def __init__(self, robot, *, render_mode=None, drive=None, **task_fields):
         import tasks
-        from tasks import navigation
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         self.robot = robot
-        self._env = tasks.load(
-            robot, drive=drive, seed=0, start_jitter=start_jitter,
-            sensor_noise=navigation.SENSOR_NOISE if sensor_noise is None else sensor_noise,
-            action_noise=navigation.ACTION_NOISE if action_noise is None else action_noise)
+        self._env = tasks.load(robot, drive=drive, seed=0, **task_fields)
         self.render_mode = render_mode
         self.observation_space = spaces.Dict(
             {k: _space(s) for k, s in self._env.observation_spec().items()})

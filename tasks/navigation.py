@@ -21,19 +21,14 @@ from dm_control.suite import base
 from dm_env import specs
 
 from models import PREFIX, UNIT, room_layout
+from tasks.config import TaskConfig
 
 # Section 3.1: the start pose is the room's "start" site (5 units from the left edge,
-# 25 below the top edge, heading right), jittered by +-3 units and +-15 degrees.
-START_JITTER_XY = 3.0
-START_JITTER_HEADING = np.deg2rad(15.0)
+# 25 below the top edge, heading right). The jitter, the sensors' range and noise and
+# the action noise are fields of tasks.config.TaskConfig.
 
-# Section 3.2: range 14 units, encoded 0 (nothing) .. 255 (touching), noise sd 5%.
-SENSOR_RANGE = 14.0
+# Section 3.2: a reading is encoded 0 (nothing) .. 255 (touching).
 SENSOR_LEVELS = 255
-SENSOR_NOISE = 0.05 * SENSOR_LEVELS  # 12.75
-
-# Section 3.3: each action component is scaled by a factor drawn from [1 - 0.05, 1].
-ACTION_NOISE = 0.05
 
 #: A 3D robot tilted more than this (degrees) has fallen over: the step raises.
 MAX_TILT_DEGREES = 10.0
@@ -46,7 +41,6 @@ class ContractError(ValueError):
 # The per-step sensor arithmetic runs as two small compiled loops: on 7-8 readings,
 # numpy's per-call overhead (about 0.3 us a call, a dozen calls) cost more than the
 # sensing itself. Same operations in the same order, so the same bits (tested).
-_PER_UNIT = -SENSOR_LEVELS / SENSOR_RANGE
 
 
 @numba.njit(cache=True)
@@ -82,15 +76,27 @@ def _encode(distance, noise, levels, per_unit):
 _NO_NOISE = np.zeros(0)
 
 
-def encode_range(distance, noise=_NO_NOISE):
+def encode_range(distance, noise=_NO_NOISE, sensor_range=TaskConfig.sensor_range):
     """Section 3.2: surface distance in units (inf = no hit) -> code in 0..255.
 
-    0 when nothing is within SENSOR_RANGE, else round(255 * (1 - d / 14)), so a
+    0 when nothing is within sensor_range (14), else round(255 * (1 - d / 14)), so a
     touching beam (d <= 0) reads 255. With noise (one value per reading), the noisy
     code clipped to [0, 255].
     """
     return _encode(np.asarray(distance, dtype=np.float64), noise, float(SENSOR_LEVELS),
-                   _PER_UNIT)
+                   -SENSOR_LEVELS / sensor_range)
+
+
+def edit_model(spec, config):
+    """The task config's changes to the composed model (an MjSpec): the robot's radius."""
+    if config.radius is not None:
+        for name, part in (("hull", True), ("shell", False)):
+            geom = spec.geom(PREFIX + name)
+            if geom is None:
+                if part:
+                    raise ContractError("no geom named 'hull' (the bumper; its radius is the robot's)")
+                continue
+            geom.size[0] = config.radius * UNIT
 
 
 def _id(model, kind, name):
@@ -152,6 +158,7 @@ class Physics(dm_mujoco.Physics):
         self.base_joints = {}
         if kinds == [mujoco.mjtJoint.mjJNT_FREE]:
             self._free = int(m.jnt_qposadr[joints[0]])
+            self._free_dof = int(m.jnt_dofadr[joints[0]])
             self._rest_height = float(m.qpos0[self._free + 2])
             return
         for j, kind in zip(joints, kinds):
@@ -256,21 +263,22 @@ class Navigation(base.Task):
     #: Action dimension, set by each robot.
     action_dim = 1
 
-    def __init__(self, *, sensor_noise=SENSOR_NOISE, action_noise=ACTION_NOISE,
-                 start_jitter=True, time_scale=1.0, random=None):
+    def __init__(self, config=TaskConfig(), *, time_scale=1.0, random=None):
         super().__init__(random=random)
+        self.config = config
         #: Seconds of an agent step over the drive's own (1 for the paper's robots).
         self.time_scale = float(time_scale)
-        self.sensor_noise = float(sensor_noise)
-        self.action_noise = float(action_noise)
-        self.start_jitter = bool(start_jitter)
+        self.sensor_noise = float(config.sensor_noise)
+        self.action_noise = float(config.action_noise)
+        self._jitter_xy = config.start_jitter_xy
+        self._jitter_heading = np.deg2rad(config.start_jitter_heading)
 
     # -- episode -------------------------------------------------------------
     def initialize_episode(self, physics):
         x, y, heading = physics.start
-        if self.start_jitter:
-            jx, jy = self.random.uniform(-START_JITTER_XY, START_JITTER_XY, size=2)
-            jh = self.random.uniform(-START_JITTER_HEADING, START_JITTER_HEADING)
+        if self.config.start_jitter:
+            jx, jy = self.random.uniform(-self._jitter_xy, self._jitter_xy, size=2)
+            jh = self.random.uniform(-self._jitter_heading, self._jitter_heading)
             x, y, heading = x + jx, y + jy, heading + jh
         physics.set_robot_pose(x, y, heading)
 
@@ -284,8 +292,9 @@ class Navigation(base.Task):
         distance = physics.ranges()
         if self.sensor_noise > 0:
             return encode_range(distance, self.random.normal(0.0, self.sensor_noise,
-                                                             size=distance.shape))
-        return encode_range(distance)
+                                                             size=distance.shape),
+                                self.config.sensor_range)
+        return encode_range(distance, sensor_range=self.config.sensor_range)
 
     def after_step(self, physics):
         self._at_goal = physics.in_goal()

@@ -53,7 +53,7 @@ def test_pose_and_velocity_read_outs_for_slide_and_free_joints(robot):
     # The body velocity, in units per agent step, against the joints' own velocity.
     v = np.array([0.3, -0.2])  # m/s
     if physics._free is not None:
-        physics.data.qvel[physics._free - 0: physics._free + 2] = v  # free joint: dofs = qpos - 0
+        physics.data.qvel[physics._free_dof: physics._free_dof + 2] = v  # free: x, y first
     else:
         physics.data.qvel[[physics.model.jnt_dofadr[physics.base_joints[k]] for k in "xy"]] = v
     physics.forward()

@@ -328,3 +328,55 @@ def test_compiled_sensing_equals_the_numpy_formula_bit_for_bit():
     assert got.tobytes() == distance.tobytes()
     assert navigation.encode_range(got).tobytes() == code.tobytes()
     assert navigation.encode_range(got, noise).tobytes() == noisy.tobytes()
+
+
+def _bump(robot, bump, vx, vy):
+    env = tasks.load(robot, seed=0, start_jitter=False, sensor_noise=0.0, action_noise=0.0,
+                     bump=bump)
+    env.reset()
+    env.physics.set_robot_pose(40.0, 3.0)  # 1.5 units above the south wall
+    for _ in range(2):
+        env.step([vx / 0.4, vy / 0.4])
+    for _ in range(25):
+        env.step([0.0, 0.0])
+    v, pose = env.physics.robot_velocity(), env.physics.robot_pose()
+    env.close()
+    return v, pose
+
+
+@pytest.mark.parametrize("robot", ["floating", "hovercraft"])
+def test_bump_readings_do_what_they_name(robot):
+    # stop: the velocity is zero at the wall, and the bumper rests on it (y = radius).
+    v, (_, y, _) = _bump(robot, "stop", 0.4, -0.4)
+    assert np.allclose(v, 0.0, atol=1e-12) and 1.5 <= y < 1.5 + 0.1
+    # slide: frictionless walls keep the motion along the wall.
+    v, _ = _bump(robot, "slide", 0.4, -0.4)
+    assert v[0] == pytest.approx(0.4, abs=0.01) and 0 <= v[1] < 0.1
+    # bounce: the velocity mirrored off the wall, elastically.
+    v, _ = _bump(robot, "bounce", 0.0, -0.4)
+    np.testing.assert_allclose(v, [0.0, 0.4], atol=1e-6)
+    v, _ = _bump(robot, "bounce", 0.4, -0.1)
+    np.testing.assert_allclose(v, [0.4, 0.1], atol=1e-6)
+
+
+def test_radius_changes_the_body_and_the_readings():
+    def ranges(**kw):
+        env = quiet_env("two_wheel", **kw)
+        env.reset()
+        env.physics.set_robot_pose(45.0, 30.0, 0.0)
+        out = env.physics.ranges(), env.physics.robot_radius
+        env.close()
+        return out
+    (r15, rad15), (r25, rad25) = ranges(), ranges(radius=2.5)
+    assert rad15 == pytest.approx(1.5) and rad25 == pytest.approx(2.5)
+    np.testing.assert_allclose(r15 - r25, 1.0, atol=1e-9)  # readings from the surface
+
+
+@pytest.mark.parametrize("field,value,message", [
+    ("bump", "wobble", "bump must be one of"), ("radius", 0.0, "radius must be positive"),
+    ("radius", 7.0, "at most 5"), ("sensor_noise", float("nan"), "finite"),
+    ("action_noise", 1.0, "below 1"), ("start_jitter", "yes", "true or false"),
+])
+def test_task_config_refuses_bad_values(field, value, message):
+    with pytest.raises(ValueError, match=message):
+        tasks.TaskConfig(**{field: value})

@@ -1,0 +1,189 @@
+"""`ebrl ablate`: how much each reading of the paper moves each claim.
+
+Every reading with a credible alternative (docs/interpretation.md) is a field of the
+agent's config (ebrl.Config) or the task's (tasks.TaskConfig). The matrix changes one
+reading at a time from the defaults (and, with --combo, several together), runs the
+protocol for each cell in its own folder (resumable like `ebrl run`), and writes
+ABLATION.md and ablation.json: the Section 3.6 figures of every cell with 95% intervals,
+and which of the paper's ten claims hold. The defaults' cell is taken from a baseline
+run folder (`--baseline results`) for the same seeds, or run here.
+"""
+import dataclasses
+import json
+import pathlib
+
+from experiments import paper, report, results, runner
+
+
+@dataclasses.dataclass(frozen=True)
+class Reading:
+    name: str              # a field of ebrl.Config or tasks.TaskConfig
+    values: tuple          # the default first
+    drives: tuple = ()     # the drives it concerns (all when empty)
+    conditions: tuple = ()  # the conditions it concerns (all when empty)
+    what: str = ""
+
+
+READINGS = (
+    Reading("bump", ("grip", "stop", "slide", "bounce"), drives=("floating",),
+            what="the floating robot at a wall"),
+    Reading("eq9_dead_zone", ("zero", "keep"), drives=("floating",), conditions=("avoidance",),
+            what="eq 9's 'not changed': zero acceleration, or the previous one kept"),
+    Reading("random_in_avoidance", ("replace", "add"), conditions=("avoidance",),
+            what="the 20% random action replaces, or is added to, the avoidance action"),
+    Reading("episode", ("trial", "continuing"),
+            what="an episode is one trial, or one continuing episode across trials"),
+    Reading("recall_at_trial_end", ("empty", "keep"), what="the recall table at a trial's end"),
+    Reading("initial_reliability", (1.0, 0.5, 0.0), what="a new element's reliability"),
+    Reading("eq7_scope", ("to_start", "decided_only"),
+            what="eq 7 walks to the episode's start, or changes only deciding elements"),
+    Reading("forgetting", ("least_reliable", "oldest"), what="which element a full memory forgets"),
+    Reading("radius", (None, 1.0, 2.5), what="the robot's radius in units (None: its file's 1.5)"),
+    Reading("policy_threshold", (0.0, 0.05, 0.2), what="eq 5's measure must exceed this"),
+)
+BY_NAME = {r.name: r for r in READINGS}
+DEFAULT = "default"
+
+
+def cell_name(changes):
+    """'bump=slide+episode=continuing' for [(name, value), ...]; 'default' for none."""
+    return "+".join(f"{k}={v}" for k, v in changes) or DEFAULT
+
+
+def cells(readings, combos):
+    """[(name, changes)] of the matrix: each non-default value of each reading alone,
+    then each combination."""
+    out = [(cell_name([(r.name, v)]), ((r.name, v),)) for r in readings for v in r.values[1:]]
+    return out + [(cell_name(c), tuple(c)) for c in combos]
+
+
+def _concerns(changes, robot, condition):
+    """Whether a cell's changes touch this robot's drive and this condition."""
+    from tasks.robots import resolve
+    drive = resolve(robot).drive
+    for name, _ in changes:
+        r = BY_NAME.get(name)
+        if r and ((r.drives and drive not in r.drives) or (r.conditions and condition not in r.conditions)):
+            return False
+    return True
+
+
+def plan(robots, seeds, steps, readings, combos):
+    """{folder name: specs} for every cell, each cell only where its readings apply."""
+    out = {}
+    for name, changes in cells(readings, combos):
+        specs = [s for s in runner.plan(robots, paper.CONDITIONS, seeds, steps, changes)
+                 if _concerns(changes, s.robot, s.condition)]
+        if specs:
+            out[name] = specs
+    return out
+
+
+def run(out, robots, seeds, steps, readings, combos, baseline=None, workers=None,
+        progress=True):
+    """Runs the matrix under out (the defaults' cell from baseline when given); returns
+    {cell: runs} of the complete runs and the failed (name, error) pairs."""
+    out = pathlib.Path(out)
+    plans = plan(robots, seeds, steps, readings, combos)
+    default_specs = runner.plan(robots, paper.CONDITIONS, seeds, steps)
+    if baseline is not None:
+        if runner.pending(baseline, default_specs):
+            raise results.ResultsError(f"{baseline} lacks some of the default runs for these "
+                                       "robots, seeds and budgets; run them there first")
+    else:
+        plans = {DEFAULT: default_specs, **plans}
+    for name, specs in plans.items():  # refuse damaged or mismatched folders first
+        runner.pending(out / name, specs)
+    failed = []
+    for name, specs in plans.items():
+        ran = runner.run(specs, out / name, workers=workers, progress=progress)
+        failed += [(f"{name}/{s.name}", e) for s, e in ran.failed]
+    cell_runs = {DEFAULT: results.load_runs(baseline if baseline is not None else out / DEFAULT,
+                                            default_specs)}
+    for name, specs in plans.items():
+        if name != DEFAULT:
+            done = [s for s in specs if results.existing(out / name, s) == "done"]
+            if done:
+                cell_runs[name] = results.load_runs(out / name, done)
+    return cell_runs, failed
+
+
+def summarize(cell_runs):
+    """ablation.json's content: every cell's summary and its claims."""
+    data = {"cells": {}}
+    for name, runs in cell_runs.items():
+        s = results.summarize(runs)
+        if name != DEFAULT:  # a cell runs only what its readings touch: fill in the rest
+            have = {(g["robot"], g["condition"]) for g in s["groups"]}
+            s["groups"] += [g for g in results.summarize(cell_runs[DEFAULT])["groups"]
+                            if (g["robot"], g["condition"]) not in have]
+            s["groups"].sort(key=lambda g: (results.robot_order(g["robot"]),
+                                            paper.CONDITIONS.index(g["condition"])))
+        claims = [{"claim": c, "ours": o, "holds": bool(h)} for c, o, h in report.claims(s)]
+        data["cells"][name] = {"groups": s["groups"], "claims": claims,
+                               "claims_held": sum(c["holds"] for c in claims)}
+    return data
+
+
+def _row(cell, g):
+    f, p = g["first_trial_steps"], g["steps_per_trial"]
+    return (f"| {cell} | {g['robot']} | {g['condition']} | {g['seeds']} "
+            f"| {report._fmt(f['mean'])} {report._ci(f['ci95'])} "
+            f"| {report._fmt(p['mean'])} {report._ci(p['ci95'])} | {report._fmt(g['shrink'], 2)} "
+            f"| {g['goals']['min']} / {report._fmt(g['goals']['median'], 1)} |")
+
+
+def tables(data):
+    """The markdown of ABLATION.md's tables (also RESULTS.md's Ablation section)."""
+    cells_ = data["cells"]
+    default_groups = {(g["robot"], g["condition"]): g for g in cells_[DEFAULT]["groups"]}
+    claim_names = list(dict.fromkeys(c["claim"] for cell in cells_.values()
+                                     for c in cell["claims"]))
+    lines = ["| cell | claims held | " + " | ".join(f"C{i + 1}" for i in range(len(claim_names))) + " |",
+             "|---|---:|" + ":-:|" * len(claim_names)]
+    for name, c in cells_.items():
+        held = {x["claim"]: x["holds"] for x in c["claims"]}
+        lines.append(f"| {name} | {c['claims_held']}/{len(c['claims'])} | "
+                     + " | ".join({True: "yes", False: "no", None: "-"}[held.get(n)]
+                                  for n in claim_names) + " |")
+    lines += ["", "Claims: " + "; ".join(f"C{i + 1} {n}" for i, n in enumerate(claim_names)) + ".", "",
+              "| cell | robot | condition | seeds | first-trial steps (95% CI) | steps per trial (95% CI) "
+              "| shrink | goals min / median |", "|---|---|---|---:|---|---|---:|---|"]
+    for name, c in cells_.items():
+        for g in c["groups"]:
+            same = name != DEFAULT and (g["robot"], g["condition"]) in default_groups and \
+                g == default_groups[(g["robot"], g["condition"])]
+            if not same:
+                lines.append(_row(name, g))
+    return "\n".join(lines)
+
+
+ABLATION_BEGIN = "<!-- ebrl ablate: generated, do not edit -->"
+ABLATION_END = "<!-- ebrl ablate: end -->"
+
+
+def write(out, data, failed=()):
+    """ablation.json and ABLATION.md under out; returns ABLATION.md's path."""
+    out = pathlib.Path(out)
+    results.atomic_write(out / "ablation.json", results.dumps(data))
+    lines = ["# Ablation of the paper's unwritten details", "",
+             "One reading changed at a time from the defaults (docs/interpretation.md), then "
+             "the combinations named by --combo. A cell runs only the robots and conditions "
+             "its readings touch; its other rows are the default's. 95% intervals are "
+             "percentile bootstraps over seeds.", "", "Readings:", ""]
+    lines += [f"- `{r.name}`: {', '.join(map(str, r.values))} (default {r.values[0]}): {r.what}"
+              for r in READINGS]
+    lines += ["", tables(data), ""]
+    if failed:
+        lines += ["## Failed runs (not averaged)", ""] + [f"- {n}: {e}" for n, e in failed] + [""]
+    path = out / "ABLATION.md"
+    results.atomic_write(path, "\n".join(lines))
+    return path
+
+
+def publish(out, results_md):
+    """RESULTS.md's Ablation block, from out/ablation.json."""
+    data = json.loads((pathlib.Path(out) / "ablation.json").read_text())
+    report.replace_block(results_md, ABLATION_BEGIN, ABLATION_END,
+                         [ABLATION_BEGIN, "", tables(data), "", ABLATION_END])
+    return results_md
