@@ -1,0 +1,51 @@
+"""`ebrl ablate` and the task settings through the real command line."""
+import json
+import pathlib
+import subprocess
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+def ebrl(*args):
+    return subprocess.run([sys.executable, "-m", "experiments", *map(str, args)], cwd=ROOT,
+                          capture_output=True, text=True, timeout=600)
+
+
+def test_a_task_setting_is_recorded_and_changes_the_run(tmp_path):
+    base = ["run", "--robot", "floating", "--condition", "random", "--seeds", "0",
+            "--steps", "400", "--workers", "1", "--no-progress"]
+    assert ebrl(*base, "--out", tmp_path / "grip").returncode == 0
+    proc = ebrl(*base, "--set", "bump=bounce", "--out", tmp_path / "bounce")
+    assert proc.returncode == 0, proc.stderr
+    run = tmp_path / "bounce" / "floating" / "random" / "seed_000"
+    config = json.loads((run / "config.json").read_text())
+    assert config["task"]["bump"] == "bounce" and config["task"]["sensor_range"] == 14.0
+    grip = (tmp_path / "grip" / "floating" / "random" / "seed_000" / "trace.npz").read_bytes()
+    assert (run / "trace.npz").read_bytes() != grip
+    bad = ebrl(*base, "--set", "bump=wobble", "--out", tmp_path / "bad")
+    assert bad.returncode == 2 and "bump must be one of" in bad.stderr
+    assert not (tmp_path / "bad").exists()
+
+
+def test_ablate_runs_each_cell_where_it_applies_and_resumes(tmp_path):
+    out = tmp_path / "ablation"
+    args = ["ablate", "--readings", "bump,radius", "--seeds", "0-1", "--steps", "300",
+            "--combo", "bump=slide,radius=1.0", "--workers", "2", "--no-progress", "--out", out]
+    proc = ebrl(*args)
+    assert proc.returncode == 0, proc.stderr
+    cells = sorted(p.name for p in out.iterdir() if p.is_dir())
+    assert cells == sorted(["default", "bump=stop", "bump=slide", "bump=bounce", "radius=1.0",
+                            "radius=2.5", "bump=slide+radius=1.0"])
+    # bump concerns the floating drive only; radius every robot.
+    assert [p.name for p in (out / "bump=stop").iterdir() if p.is_dir()] == ["floating"]
+    assert sorted(p.name for p in (out / "radius=2.5").iterdir() if p.is_dir()) == \
+        ["floating", "two_wheel"]
+    data = json.loads((out / "ablation.json").read_text())
+    assert set(data["cells"]) == set(cells)
+    assert "bump=stop" in (out / "ABLATION.md").read_text()
+    again = ebrl(*args)
+    assert again.returncode == 0 and again.stdout.strip().endswith("ABLATION.md")
+    assert json.loads((out / "ablation.json").read_text()) == data
+    bad = ebrl("ablate", "--readings", "colour", "--out", tmp_path / "x")
+    assert bad.returncode == 2 and "unknown reading" in bad.stderr
