@@ -12,6 +12,8 @@ import sys
 
 from experiments import paper, validate
 
+#: The learners of `--agent` (experiments.protocol.AGENTS, without importing it here).
+AGENTS = ("ebrl", "qtable", "mfec")
 USAGE_ERROR = 2
 RUNS_FAILED = 1
 INTERRUPTED = 130
@@ -130,6 +132,8 @@ def build_parser():
                         f"at most {validate.MAX_STEPS:,})")
     r.add_argument("--workers", type=_up_to(validate.MAX_WORKERS), default=os.cpu_count() or 1)
     r.add_argument("--backend", type=_choice(("local", "ray")), default="local")
+    r.add_argument("--agent", type=_choice(AGENTS), default="ebrl",
+                   help="the learner: " + ", ".join(AGENTS) + " (default: ebrl, the paper's)")
     r.add_argument("--out", type=pathlib.Path, default=pathlib.Path("results"))
     r.add_argument("--set", type=_override, action="append", default=[], metavar="NAME=VALUE",
                    help="change an agent parameter from Table 1's (for sweeps)")
@@ -176,6 +180,7 @@ def build_parser():
     w.add_argument("--seeds", type=parse_seeds, default=list(range(20)))
     w.add_argument("--steps", type=_up_to(validate.MAX_STEPS), default=None)
     w.add_argument("--workers", type=_up_to(validate.MAX_WORKERS), default=os.cpu_count() or 1)
+    w.add_argument("--agent", type=_choice(AGENTS), default="ebrl")
     w.add_argument("--out", type=pathlib.Path, default=pathlib.Path("sweeps"))
     w.add_argument("--baseline", type=pathlib.Path, default=None,
                    help="a run folder (e.g. results) whose runs at the default value join the "
@@ -226,7 +231,8 @@ def _check_agent(args, overrides):
     twice = next((name for name in names if names.count(name) > 1), None)
     if twice is not None:
         raise ValueError(f"--set {twice} is given more than once")
-    validate.agent_configs(_selected_robots(args), overrides, args.drive)
+    validate.agent_configs(_selected_robots(args), overrides, args.drive,
+                           getattr(args, "agent", "ebrl"))
 
 
 def _check_backend(backend):
@@ -268,7 +274,7 @@ def _plan(args, overrides=()):
     from experiments import runner
     conditions = paper.CONDITIONS if args.condition == "all" else (args.condition,)
     return runner.plan(_selected_robots(args), conditions, args.seeds, args.steps, overrides,
-                       args.drive)
+                       args.drive, getattr(args, "agent", "ebrl"))
 
 
 def cmd_robots(args):

@@ -187,7 +187,7 @@ def yardstick(runs, root=None):
         if robot not in cache:
             p = next(run["parameters"] for (r, _, _), run in runs.items() if r == robot)
             file = p.get("robot_file")
-            cache[robot] = optimal(file or robot, p["drive"] if file else None)
+            cache[robot] = optimal(file or p.get("robot_name", robot), p["drive"] if file else None)
         best = cache[robot]
         ms = [run["metrics"] for (r, c, _), run in runs.items() if (r, c) == (robot, condition)]
         mins = [m["min_trial_steps"] for m in ms if m["min_trial_steps"] is not None]

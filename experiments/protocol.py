@@ -31,6 +31,8 @@ class RunSpec:
     overrides: tuple = ()
     #: The drive of a robot file (None for a registered robot: the registry has it).
     drive: str = None
+    #: The learner: "ebrl" (the paper's) or a baseline of ebrl.baselines ("qtable", "mfec").
+    agent: str = "ebrl"
 
     @property
     def entry(self):
@@ -40,18 +42,24 @@ class RunSpec:
 
     @property
     def label(self):
-        """The robot's name in folders and tables: its registered name, or its file's stem."""
-        return self.robot if self.drive is None else pathlib.Path(self.robot).stem
+        """The robot's name in folders and tables: its registered name, or its file's stem;
+        with ".<agent>" after it for a learner other than EBRL."""
+        name = self.robot if self.drive is None else pathlib.Path(self.robot).stem
+        return name if self.agent == "ebrl" else f"{name}.{self.agent}"
 
     @property
     def name(self):
         return f"{self.label}/{self.condition}/seed_{self.seed:03d}"
 
     def agent_config(self):
-        """Table 1's column for the robot, with the overrides that name agent fields."""
-        fields = {f.name for f in dataclasses.fields(ebrl.Config)}
-        return ebrl.paper_config(self.entry.table1,
-                                 **{k: v for k, v in self.overrides if k in fields})
+        """EBRL: Table 1's column for the robot; a baseline: its config's defaults; with the
+        overrides that name the config's fields."""
+        config_cls, _ = agent_classes(self.agent)
+        fields = {f.name for f in dataclasses.fields(config_cls)}
+        mine = {k: v for k, v in self.overrides if k in fields}
+        if self.agent == "ebrl":
+            return ebrl.paper_config(self.entry.table1, **mine)
+        return config_cls(**mine)
 
     def task_config(self):
         """The paper's task, with the overrides that name task fields."""
@@ -66,10 +74,12 @@ class RunSpec:
             "protocol_version": PROTOCOL_VERSION,
             "robot": self.label,
             "robot_file": None if self.drive is None else str(entry.model),
+            "robot_name": entry.name,
             "drive": entry.drive,
             "condition": self.condition,
             "seed": self.seed,
             "steps": self.steps,
+            "learner": self.agent,
             "agent": dataclasses.asdict(self.agent_config()),
             "avoidance": entry.avoidance,
             "modalities": [list(m) for m in entry.modalities],
@@ -88,6 +98,20 @@ def model_digest(entry, task_config):
     import tasks
     _, spec = tasks.compile_robot(entry, task_config)
     return hashlib.sha256(spec.to_xml().encode()).hexdigest()[:16]
+
+
+#: The learners `ebrl run --agent` knows: the paper's, then the baselines of Section 4.
+AGENTS = ("ebrl", "qtable", "mfec")
+
+
+def agent_classes(name):
+    """(config class, agent class) of a learner of AGENTS."""
+    if name == "ebrl":
+        return ebrl.Config, ebrl.Agent
+    if name not in AGENTS:
+        raise ValueError(f"unknown agent {name!r}; valid: {', '.join(AGENTS)}")
+    from ebrl.baselines import AGENTS as BASELINES
+    return BASELINES[name]
 
 
 def seeds_for(seed):
@@ -112,8 +136,9 @@ def make_agent(spec, env):
     config = spec.agent_config()
     fallback = ebrl.intrinsic.fallback_for(entry.avoidance, spec.condition,
                                            config.intrinsic_random_rate, config.random_sd)
-    return ebrl.Agent(config, sum(sizes), env.action_spec().shape[0], fallback,
-                      groups=groups, group_weights=weights, seed=agent_seed)
+    _, agent_cls = agent_classes(spec.agent)
+    return agent_cls(config, sum(sizes), env.action_spec().shape[0], fallback,
+                     groups=groups, group_weights=weights, seed=agent_seed)
 
 
 @functools.cache

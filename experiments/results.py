@@ -219,11 +219,15 @@ def trial_paths(trace, starts, trial_ends):
 
 
 # -- summary -----------------------------------------------------------------------
-def robot_order(robot):
-    """Registered robots in the registry's order, then the others."""
+def robot_order(label):
+    """Group labels ("robot" or "robot.agent") in the registry's order of robots, then
+    by learner (EBRL first); robots not in the registry after them."""
+    from experiments.protocol import AGENTS
     from tasks.robots import ROBOTS
     names = list(ROBOTS)
-    return names.index(robot) if robot in names else len(names)
+    robot, _, agent = label.partition(".")
+    return (names.index(robot) if robot in names else len(names),
+            AGENTS.index(agent or "ebrl") if (agent or "ebrl") in AGENTS else len(AGENTS))
 
 
 
@@ -273,6 +277,7 @@ def summarize(runs):
         groups.append({
             "robot": robot, "condition": condition,
             "drive": runs[(robot, condition, seeds[0])]["parameters"].get("drive"),
+            "agent": runs[(robot, condition, seeds[0])]["parameters"].get("learner", "ebrl"),
             "steps": steps[0] if len(steps) == 1 else steps,
             "seeds": len(seeds),
             "first_trial_steps": f,

@@ -33,7 +33,7 @@ TEST_FAIL, TEST_CRASH = "EBRL_TEST_FAIL", "EBRL_TEST_CRASH"
 Ran = collections.namedtuple("Ran", "made on_disk failed")
 
 
-def plan(robots, conditions, seeds, steps=None, overrides=(), drive=None):
+def plan(robots, conditions, seeds, steps=None, overrides=(), drive=None, agent="ebrl"):
     """Specs in the order to start them: the longest first, for an even finish.
 
     steps: None for each robot's budget (the registry's), a number for all, or a dict
@@ -46,7 +46,7 @@ def plan(robots, conditions, seeds, steps=None, overrides=(), drive=None):
         return steps if steps is not None else resolve(robot, drive).budget
 
     specs = [protocol.RunSpec(r, c, s, budget(r), tuple(sorted(dict(overrides).items())),
-                              drive)
+                              drive, agent)
              for r in robots for c in conditions for s in seeds]
     return sorted(specs, key=lambda s: -s.steps)
 

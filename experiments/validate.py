@@ -62,15 +62,20 @@ def integer(text, lo, hi):
     return value
 
 
-def setting_kinds():
-    """Every --set name, the agent's (ebrl.Config) then the task's (tasks.TaskConfig),
-    with the type its value takes (a field whose default is None takes a number)."""
-    import dataclasses
-
-    import ebrl
+def _setting_classes():
+    """The config classes whose fields --set may name: every learner's, then the task's."""
+    from experiments import protocol
     from tasks.config import TaskConfig
+    return [protocol.agent_classes(a)[0] for a in protocol.AGENTS] + [TaskConfig]
+
+
+def setting_kinds():
+    """Every --set name, the learners' (ebrl.Config, the baselines') then the task's
+    (tasks.TaskConfig), with the type its value takes (a field whose default is None
+    takes a number)."""
+    import dataclasses
     kinds = {}
-    for cls in (ebrl.Config, TaskConfig):
+    for cls in _setting_classes():
         default = cls()
         for f in dataclasses.fields(cls):
             value = getattr(default, f.name)
@@ -79,10 +84,8 @@ def setting_kinds():
 
 
 def setting_default(name):
-    """The default value of a --set name (the agent's or the task's)."""
-    import ebrl
-    from tasks.config import TaskConfig
-    for cls in (ebrl.Config, TaskConfig):
+    """The default value of a --set name (EBRL's, a baseline's, or the task's)."""
+    for cls in _setting_classes():
         if hasattr(cls(), name):
             return getattr(cls(), name)
     raise ValueError(f"unknown setting {name!r}")
@@ -106,32 +109,37 @@ def number(kind, name, text):
     return value
 
 
-def agent_configs(robots, overrides, drive=None):
-    """Builds each robot's agent config (its Table 1 column) with overrides once, here,
-    so that a value the config refuses (ebrl.Config.__post_init__) stops the command
-    before any run."""
-    import ebrl
-    from tasks.robots import resolve
+def agent_configs(robots, overrides, drive=None, agent="ebrl"):
+    """Builds each robot's agent config and task config with the overrides once, here,
+    as a run would (protocol.RunSpec), so that a name the chosen learner and the task do
+    not have, or a value their configs refuse, stops the command before any run."""
+    import dataclasses
+
+    from experiments import protocol
+    from tasks.config import TaskConfig
     overrides = dict(overrides)
     size = overrides.get("memory_size")
     if size is not None and size > MAX_MEMORY_SIZE:
         raise ValueError(f"memory_size must be at most {MAX_MEMORY_SIZE:,}, got {size:,}")
-    import dataclasses
-
-    from tasks.config import TaskConfig
+    config_cls, _ = protocol.agent_classes(agent)
+    known = {f.name for cls in (config_cls, TaskConfig) for f in dataclasses.fields(cls)}
+    unknown = next((k for k in overrides if k not in known), None)
+    if unknown is not None:
+        raise ValueError(f"--set {unknown} is not a parameter of the {agent} agent or the task")
     task_fields = {f.name for f in dataclasses.fields(TaskConfig)}
-    task = {k: v for k, v in overrides.items() if k in task_fields}
-    overrides = {k: v for k, v in overrides.items() if k not in task_fields}
-    try:
-        TaskConfig(**task)
-    except (TypeError, ValueError) as e:
-        shown = " ".join(f"{k}={v}" for k, v in sorted(task.items()))
-        raise ValueError(f"task parameters {shown}: {e}") from None
+    shown = " ".join(f"{k}={v}" for k, v in sorted(overrides.items()))
     for robot in robots:
+        spec = protocol.RunSpec(robot, "random", 0, 1, tuple(sorted(overrides.items())),
+                                drive, agent)
         try:
-            ebrl.paper_config(resolve(robot, drive).table1, **overrides)
+            spec.task_config()
         except (TypeError, ValueError) as e:
-            shown = " ".join(f"{k}={v}" for k, v in sorted(overrides.items()))
+            raise ValueError(f"task parameters {shown}: {e}") from None
+        try:
+            spec.agent_config()
+        except (TypeError, ValueError) as e:
+            shown = " ".join(f"{k}={v}" for k, v in sorted(overrides.items())
+                             if k not in task_fields)
             raise ValueError(f"agent parameters {shown} for {robot}: {e}") from None
 
 
