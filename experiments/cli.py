@@ -421,10 +421,16 @@ def cmd_sweep(args):
         path = report.sweep_table(args.out, args.param, rows, failed) if rows else None
     except results.ResultsError as e:
         return _fail(str(e))
+    return _finish("sweep", path, failed)
+
+
+def _finish(what, path, failed):
+    """The last line of a command that runs many folders: what it wrote, or (exit 1) the
+    failed (name, error) runs."""
     if failed:
         return _fail(f"{_failed_line(failed)}; recorded in run.json, not averaged; "
-                     f"sweep: {path}; rerun the same command to retry", RUNS_FAILED)
-    print(f"sweep: {path}")
+                     f"{what}: {path}; rerun the same command to retry", RUNS_FAILED)
+    print(f"{what}: {path}")
     return 0
 
 
@@ -468,11 +474,7 @@ def cmd_ablate(args):
             print(f"published: {ablation.publish(args.out, args.results)}")
     except results.ResultsError as e:
         return _fail(str(e))
-    if failed:
-        return _fail(f"{_failed_line(failed)}; recorded in run.json, not averaged; "
-                     f"ablation: {path}; rerun the same command to retry", RUNS_FAILED)
-    print(f"ablation: {path}")
-    return 0
+    return _finish("ablation", path, failed)
 
 
 def cmd_demo(args):
