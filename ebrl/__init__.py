@@ -40,6 +40,34 @@ eq 9-10   avoidance by accelerating   intrinsic.avoid_by_accelerating ("eq9-10")
 
 kernels.act and kernels.learn chain these for one step; ebrl.Agent holds the memory and
 calls them, once each per step.
+
+Readings with a credible alternative are switches: Config fields whose values are
+listed in config.READINGS, the first (docs/interpretation.md's reading) the default;
+tests in tests/test_ebrl_readings.py.
+
+episode              trial / continuing        Agent.end_episode (keeps or cuts the link)
+                     test_episode_continuing_keeps_the_link_across_a_trial_end,
+                     test_episode_continuing_lets_eq7_cross_a_trial_end
+recall_at_trial_end  empty / keep              Agent.end_episode
+                     test_recall_table_kept_or_emptied_at_a_trial_end
+eq7_scope (eq 7)     to_start / decided_only   kernels.eq7, kernels.eq7_decided via
+                                               kernels.learn; Agent.act sets the flags
+                     test_eq7_scope_to_start_or_decided_only,
+                     test_eq7_decided_only_counts_an_element_once_and_forgets_its_flag
+forgetting (2.1)     least_reliable / oldest   kernels.least_reliable, kernels.oldest
+                                               via kernels.learn
+                     test_forgetting_least_reliable_or_oldest,
+                     test_oldest_kernel_takes_the_smallest_time_stamp
+eq9_dead_zone        zero / keep               intrinsic.Intrinsic (hold) and
+  (eq 9)                                       intrinsic.avoid_by_accelerating(previous)
+                     test_eq9_dead_zone_keep_repeats_the_previous_acceleration,
+                     test_eq9_keep_is_reset_by_the_agent_at_a_trial_end_and_ignored_by_eq8
+random_in_avoidance  replace / add             intrinsic.Intrinsic
+  (3.4)              test_random_in_avoidance_add_is_avoidance_plus_random_clipped
+initial_reliability  a number in [0, 1]        kernels.learn
+                     test_initial_reliability_sets_the_forgetting_order
+The defaults reproduce the agent from before the switches bit for bit:
+test_defaults_reproduce_the_agent_before_the_switches (against stored digests).
 """
 from ebrl import intrinsic
 from ebrl.agent import Agent

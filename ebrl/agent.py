@@ -9,13 +9,21 @@ Worked example::
     for t in range(100):
         action = agent.act(obs)            # memory (eq 5) or the fallback behaviour
         obs, reward, last = np.random.rand(7), float(t == 99), t == 99   # your environment
-        agent.learn(reward, last)          # store, eq 6-7, time discount; last ends the episode
+        agent.learn(reward, last)          # store, eq 6-7, time discount; last ends the trial
 
 Per step: act(s_t) advances the recall table (eq 1), adds the memory elements most
 similar to s_t (eq 2-4), and acts as the best entry's element did (eq 5) unless no
 entry exceeds the threshold or the agent explores. learn(r) stores (s_t, a_t) as the
 next element of the current episode, forgetting the least reliable element when the
 memory is full, then applies eq 6 and eq 7 when r != 0 and decays every reliability.
+learn(r, last=True) ends the trial (end_episode).
+
+The readings that Config makes switches (ebrl.config.READINGS) act here as follows:
+episode and recall_at_trial_end at a trial's end (end_episode), eq7_scope and
+forgetting in kernels.learn; eq7_scope "decided_only" also flags, in act, each element
+used for a memory decision. eq9_dead_zone and random_in_avoidance belong to the
+fallback (ebrl.intrinsic.fallback_for builds it from them); the agent only calls the
+fallback's reset(), if it has one, when a trial ends.
 
 The work of each step is done by two compiled kernels, ebrl.kernels.act and
 ebrl.kernels.learn, on the arrays this class holds; the agent's random stream is one
@@ -26,7 +34,7 @@ import math
 import numpy as np
 
 from ebrl import kernels
-from ebrl.config import Config
+from ebrl.config import Config, reading_code
 from ebrl.kernels import eq1, eq5
 
 __all__ = ["Agent", "eq1", "eq5"]
@@ -71,11 +79,16 @@ class Agent:
         self._sums = np.zeros((2, n))  # running sums of x and x^2, for eq 2's V_i
         self._var = np.full(n, float(config.variance_floor))  # eq 2's V_i
         self._sim = np.zeros(M)  # the current input's similarities (act's scratch)
+        self._decided = np.zeros(M, dtype=np.bool_)  # used for a decision this trial (eq 7)
         # Recall table (2.2), the episode being recorded, the last decision.
         self._table = np.full(config.recall_size, -1, dtype=np.int64)  # -1: empty
         self._table_w = np.zeros(config.recall_size)
         self._tail = -1        # the current episode's latest element
         self._referred = -1    # the trial's latest element used for a decision (eq 7)
+        # The switches acting here (ebrl.config.READINGS; the kernels get ints).
+        self._continuing = config.episode == "continuing"
+        self._keep_recall = config.recall_at_trial_end == "keep"
+        self._flag_decisions = config.eq7_scope == "decided_only"
         self._obs = None  # the last act's input and action, until learn stores them
         self._act = None
         # The kernels' other arguments, in their order: the arrays above (updated in
@@ -92,7 +105,9 @@ class Agent:
                             self._table, self._table_w, float(c.variance_floor),
                             float(c.initial_utility), float(c.initial_reliability),
                             float(c.discount), float(c.utility_cutoff),
-                            float(c.reliability_rate), float(c.time_discount))
+                            float(c.reliability_rate), float(c.time_discount),
+                            self._decided, reading_code("eq7_scope", c.eq7_scope),
+                            reading_code("forgetting", c.forgetting))
         self.steps = 0
         self.used_memory = False
         self.memory_decisions = 0
@@ -145,6 +160,8 @@ class Agent:
         if element >= 0 and not explore:
             action = self._action[element].copy()
             self._referred = element
+            if self._flag_decisions:
+                self._decided[element] = True
             self.used_memory = True
             self.memory_decisions += 1
         else:
@@ -157,13 +174,13 @@ class Agent:
 
     # -- learning ------------------------------------------------------------------
     def learn(self, reward, last=False):
-        """Stores the last act's experience, learns from reward, ends the episode if last."""
+        """Stores the last act's experience, learns from reward, ends the trial if last."""
         if self._act is None:
             raise ValueError("learn() needs an act() first")
         reward = float(reward)
         if not math.isfinite(reward):
             raise ValueError("reward must be finite")
-        # Store (forgetting the least reliable when full), eq 6, eq 7, time discount.
+        # Store (forgetting one element when full), eq 6, eq 7, time discount.
         self._size, self._tail, self._referred = kernels.learn(
             self._obs, self._act, reward, self.steps, self._size, self._tail,
             self._referred, *self._learn_args)
@@ -173,6 +190,22 @@ class Agent:
             self.end_episode()
 
     def end_episode(self):
-        """The next act starts a new episode, with an empty recall table."""
-        self._tail = self._referred = -1
-        self._table[:] = -1
+        """A trial ends (learn(..., last=True) calls this).
+
+        episode "trial": the episode ends with it, so the next element has no backward
+        link; "continuing": the link from this trial's last element to the next one's
+        first is kept, and eq 6 and eq 7 follow it. recall_at_trial_end "empty": the
+        recall table is emptied; "keep": it stays, its entries advancing at the next
+        act. Either way eq 7's starting point is reset: the trial's memory decisions
+        (the latest one, and the decided flags of eq7_scope "decided_only") were judged
+        by its last reward. The fallback's reset(), if any, is called."""
+        if not self._continuing:
+            self._tail = -1
+        self._referred = -1
+        if self._flag_decisions:
+            self._decided[:] = False
+        if not self._keep_recall:
+            self._table[:] = -1
+        reset = getattr(self.fallback, "reset", None)
+        if reset is not None:
+            reset()

@@ -4,6 +4,45 @@ import dataclasses
 #: Table 1's memory size by column: (T) two wheels robot, (F) floating robot.
 TABLE1_MEMORY = {"T": 1024, "F": 4096}
 
+#: The agent-side readings of the paper with a credible alternative, as switches: each
+#: Config field named here takes one of its values, the first being this replication's
+#: reading (the default). docs/interpretation.md gives each reading and its reason;
+#: the kernels receive a value as its index in this tuple.
+READINGS = {
+    # 2.1: an episode is one trial (the first element of a trial has no backward link),
+    # or one episode continues across trials (the link from a trial's last element to
+    # the next trial's first is kept, so eq 6 and eq 7 follow it).
+    "episode": ("trial", "continuing"),
+    # 2.2: the recall table is emptied when a trial ends, or kept (its entries then
+    # advance along their forward links at the next act, as on any step).
+    "recall_at_trial_end": ("empty", "keep"),
+    # eq 7: from the last memory decision's element back along its links to its
+    # episode's start, or only the elements used for a memory decision in the trial.
+    "eq7_scope": ("to_start", "decided_only"),
+    # 2.1: when the memory is full, forget the least reliable element (first slot on
+    # ties), or the oldest (smallest time stamp).
+    "forgetting": ("least_reliable", "oldest"),
+    # eq 9: inside the dead zone the acceleration on that axis is 0, or the fallback's
+    # previous acceleration on that axis is kept (0 again after a trial's end).
+    "eq9_dead_zone": ("zero", "keep"),
+    # 3.4: with probability intrinsic_random_rate the random action replaces the
+    # avoidance action, or is added to it (the sum clipped to [-1, 1]).
+    "random_in_avoidance": ("replace", "add"),
+}
+
+
+def check_reading(name, value):
+    """value if it is one of READINGS[name]'s values, else ValueError naming both."""
+    valid = READINGS[name]
+    if not isinstance(value, str) or value not in valid:
+        raise ValueError(f"{name} must be one of {', '.join(valid)}; got {value!r}")
+    return value
+
+
+def reading_code(name, value):
+    """The kernels' int for a reading: its index in READINGS[name] (0 = the default)."""
+    return READINGS[name].index(check_reading(name, value))
+
 
 @dataclasses.dataclass(frozen=True)
 class Config:
@@ -24,6 +63,13 @@ class Config:
     # Section 3.4.
     intrinsic_random_rate: float = 0.2
     random_sd: float = 0.5
+    # Readings with a credible alternative, as switches (READINGS above; default first).
+    episode: str = "trial"
+    recall_at_trial_end: str = "empty"
+    eq7_scope: str = "to_start"
+    forgetting: str = "least_reliable"
+    eq9_dead_zone: str = "zero"          # the fallback's (ebrl.intrinsic.fallback_for)
+    random_in_avoidance: str = "replace"  # the fallback's (ebrl.intrinsic.fallback_for)
 
     def __post_init__(self):
         for name in ("memory_size", "recall_size"):
@@ -50,6 +96,8 @@ class Config:
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and v == v and abs(v) != float("inf")):
                 raise ValueError(f"{name} must be a finite number, got {v!r}")
+        for name in READINGS:
+            check_reading(name, getattr(self, name))
 
 
 def paper_config(column, **overrides):

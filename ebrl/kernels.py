@@ -16,14 +16,23 @@ The memory, as the kernels see it (M = memory_size, n = obs_dim):
     time[m]        the step at which m was stored (eq 6's exponent)
     nxt[m], prev[m] m's forward and backward links in its episode, -1 for none
     sums[0], sums[1] running sums of x and x^2 over the stored inputs (eq 2's V_i)
+    decided[m]     m was used for a memory decision in the current trial (eq 7 with
+                   eq7_scope "decided_only"; kept False otherwise)
 Elements 0..size-1 are stored. The recall table is table[e] (an element, -1 for an
 empty entry) and table_w[e] (its weight W), best first: larger weight, then lower
 element.
+
+The readings that are switches (ebrl.config.READINGS) reach the kernels as ints, the
+value's index there (0 = the default reading): learn's eq7_scope (EQ7_TO_START,
+EQ7_DECIDED_ONLY) and forgetting (FORGET_LEAST_RELIABLE, FORGET_OLDEST). The episode
+and recall-table switches act at a trial's end, in ebrl.Agent.end_episode.
 """
 import numpy as np
 from numba import njit
 
 INVALID = -2  # act's answer for an observation that is not finite or whose square overflows
+EQ7_TO_START, EQ7_DECIDED_ONLY = 0, 1  # learn's eq7_scope
+FORGET_LEAST_RELIABLE, FORGET_OLDEST = 0, 1  # learn's forgetting
 
 
 @njit(cache=True)
@@ -139,6 +148,17 @@ def least_reliable(rel, size):
 
 
 @njit(cache=True)
+def oldest(time, size):
+    """The element of oldest time stamp, the first on ties (forgetting "oldest", 2.1:
+    the memory as a queue; time stamps are unique, one element stored per step)."""
+    found = 0
+    for m in range(1, size):
+        if time[m] < time[found]:
+            found = m
+    return found
+
+
+@njit(cache=True)
 def forget(k, inputs, sums, nxt, prev, table, table_w, tail, referred):
     """Removes element k (2.1): its episode's neighbours are linked to each other, a
     recall entry pointing at it is dropped, its input leaves the variance sums.
@@ -193,14 +213,30 @@ def eq6(utility, prev, time, newest, reward, discount, cutoff):
 
 
 @njit(cache=True)
+def eq7_change(r, reward, rho):
+    """eq 7 for one element: R + rho r (1 - R) when r > 0, R + rho r R when r < 0."""
+    return r + rho * reward * ((1.0 - r) if reward > 0 else r)
+
+
+@njit(cache=True)
 def eq7(rel, prev, referred, reward, rho):
-    """eq 7 along the backward links from the element used for the last memory decision
-    to its episode's start: R += rho r (1 - R) when r > 0, R += rho r R when r < 0."""
+    """eq 7, eq7_scope "to_start": along the backward links from the element used for
+    the last memory decision to its episode's start: R += rho r (1 - R) when r > 0,
+    R += rho r R when r < 0."""
     j = referred
     while j >= 0:
-        r = rel[j]
-        rel[j] = r + rho * reward * ((1.0 - r) if reward > 0 else r)
+        rel[j] = eq7_change(rel[j], reward, rho)
         j = prev[j]
+
+
+@njit(cache=True)
+def eq7_decided(rel, decided, size, reward, rho):
+    """eq 7, eq7_scope "decided_only": once on each element used for a memory decision
+    in the current trial (decided[m]), however often it was used; no other element
+    changes."""
+    for m in range(size):
+        if decided[m]:
+            rel[m] = eq7_change(rel[m], reward, rho)
 
 
 @njit(cache=True)
@@ -213,14 +249,23 @@ def time_discount(rel, size, rate):
 @njit(cache=True)
 def learn(x, action, reward, step, size, tail, referred, inputs, sums, variance, actions,
           utility, rel, time, nxt, prev, table, table_w, floor, initial_utility,
-          initial_reliability, discount, cutoff, rho, decay):
+          initial_reliability, discount, cutoff, rho, decay, decided, eq7_scope, forgetting):
     """One learn: stores (x, action) as the episode's next element, in a free slot or,
-    when the memory is full, in the least reliable element's (forgotten first); then
-    eq 6 and eq 7 if reward != 0, then the time discount. Returns (size, tail, referred).
+    when the memory is full, in a forgotten element's; then eq 6 and eq 7 if
+    reward != 0, then the time discount. Returns (size, tail, referred).
+
+    forgetting (2.1): FORGET_LEAST_RELIABLE forgets the least reliable element,
+    FORGET_OLDEST the oldest. eq7_scope: EQ7_TO_START applies eq 7 from `referred`
+    back to its episode's start (when referred >= 0), EQ7_DECIDED_ONLY to the elements
+    flagged in `decided`. A reused slot's decided flag is cleared.
     """
     if size == rel.shape[0]:
-        slot = least_reliable(rel, size)
+        if forgetting == FORGET_OLDEST:
+            slot = oldest(time, size)
+        else:
+            slot = least_reliable(rel, size)
         tail, referred = forget(slot, inputs, sums, nxt, prev, table, table_w, tail, referred)
+        decided[slot] = False
     else:
         slot = size
         size += 1
@@ -240,7 +285,9 @@ def learn(x, action, reward, step, size, tail, referred, inputs, sums, variance,
     tail = slot
     if reward != 0.0:
         eq6(utility, prev, time, slot, reward, discount, cutoff)
-        if referred >= 0:
+        if eq7_scope == EQ7_DECIDED_ONLY:
+            eq7_decided(rel, decided, size, reward, rho)
+        elif referred >= 0:
             eq7(rel, prev, referred, reward, rho)
     time_discount(rel, size, decay)
     return size, tail, referred

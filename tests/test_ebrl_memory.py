@@ -109,12 +109,12 @@ def test_memory_arrays_are_disjoint_and_initialised(memory_size, obs_dim, groups
     ag = ebrl.Agent(cfg, obs_dim, 2, intrinsic.RandomWalk(2), seed=0,
                     groups=groups, group_weights=None if groups is None else [0.7, 0.3])
     arrays = [ag._inputs, ag._action, ag._utility, ag._rel, ag._time, ag._next, ag._prev,
-              ag._sums, ag._var, ag._sim, ag._table, ag._table_w]
+              ag._sums, ag._var, ag._sim, ag._table, ag._table_w, ag._decided]
     for i, a in enumerate(arrays):
         assert a.flags.c_contiguous and a.flags.writeable
         assert not any(np.shares_memory(a, b) for b in arrays[i + 1:])
     assert (ag._next == -1).all() and (ag._prev == -1).all() and (ag._table == -1).all()
-    assert not ag._inputs.any() and not ag._sums.any()
+    assert not ag._inputs.any() and not ag._sums.any() and not ag._decided.any()
     assert ag._inputs.shape == (obs_dim, memory_size) and ag._action.shape == (memory_size, 2)
     # The kernels' argument tuples hold these very arrays (updated in place, never rebound).
     held = arrays + [ag._group_of, ag._group_size, ag._group_weight]
