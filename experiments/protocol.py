@@ -134,8 +134,10 @@ def make_agent(spec, env):
         weights = [w for _, w in entry.modalities]
     _, agent_seed = seeds_for(spec.seed)
     config = spec.agent_config()
-    fallback = ebrl.intrinsic.fallback_for(entry.avoidance, spec.condition,
-                                           config.intrinsic_random_rate, config.random_sd)
+    fallback = ebrl.intrinsic.fallback_for(
+        entry.avoidance, spec.condition, config.intrinsic_random_rate, config.random_sd,
+        eq9_dead_zone=getattr(config, "eq9_dead_zone", "zero"),
+        random_in_avoidance=getattr(config, "random_in_avoidance", "replace"))
     _, agent_cls = agent_classes(spec.agent)
     return agent_cls(config, sum(sizes), env.action_spec().shape[0], fallback,
                      groups=groups, group_weights=weights, seed=agent_seed)
