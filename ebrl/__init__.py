@@ -40,8 +40,13 @@ eq 9-10   avoidance by accelerating   intrinsic.avoid_by_accelerating ("eq9-10")
 
 kernels.act and kernels.learn chain these for one step; ebrl.Agent holds the memory and
 calls them, once each per step.
+
+Section 4's other learners, behind the same interface (ebrl.baselines, tested in
+tests/test_baselines.py; baselines.AGENTS names them): QTable, tabular Q-learning with
+roulette-wheel selection, whose confidence is the variance of its action probabilities;
+MFEC, model-free episodic control, trusted where its nearest neighbours are near.
 """
-from ebrl import intrinsic
+from ebrl import baselines, intrinsic
 from ebrl.agent import Agent
 from ebrl.config import Config, paper_config
 from ebrl.similarity import similarity
