@@ -68,8 +68,13 @@ initial_reliability  a number in [0, 1]        kernels.learn
                      test_initial_reliability_sets_the_forgetting_order
 The defaults reproduce the agent from before the switches bit for bit:
 test_defaults_reproduce_the_agent_before_the_switches (against stored digests).
+
+Section 4's other learners, behind the same interface (ebrl.baselines, tested in
+tests/test_baselines.py; baselines.AGENTS names them): QTable, tabular Q-learning with
+roulette-wheel selection, whose confidence is the variance of its action probabilities;
+MFEC, model-free episodic control, trusted where its nearest neighbours are near.
 """
-from ebrl import intrinsic
+from ebrl import baselines, intrinsic
 from ebrl.agent import Agent
 from ebrl.config import Config, paper_config
 from ebrl.similarity import similarity
