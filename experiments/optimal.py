@@ -184,11 +184,12 @@ def yardstick(runs, root=None):
     out = []
     cache = {}
     for robot, condition in sorted({(r, c) for r, c, _ in runs}):
-        if robot not in cache:
-            p = next(run["parameters"] for (r, _, _), run in runs.items() if r == robot)
-            file = p.get("robot_file")
-            cache[robot] = optimal(file or p.get("robot_name", robot), p["drive"] if file else None)
-        best = cache[robot]
+        p = next(run["parameters"] for (r, _, _), run in runs.items() if r == robot)
+        file = p.get("robot_file")
+        key = (file or p.get("robot_name", robot), p["drive"] if file else None)
+        if key not in cache:  # one per robot, whichever learners ran it
+            cache[key] = optimal(*key)
+        best = cache[key]
         ms = [run["metrics"] for (r, c, _), run in runs.items() if (r, c) == (robot, condition)]
         mins = [m["min_trial_steps"] for m in ms if m["min_trial_steps"] is not None]
         lasts = [m["last_trial_steps"] for m in ms if m["last_trial_steps"] is not None]
