@@ -36,6 +36,7 @@ import numpy as np
 from ebrl import kernels
 from ebrl.config import Config, reading_code
 from ebrl.kernels import eq1, eq5
+from ebrl.similarity import modalities
 
 __all__ = ["Agent", "eq1", "eq5"]
 
@@ -52,21 +53,8 @@ class Agent:
         self.rng = np.random.default_rng(seed)
         M = config.memory_size
         # Modalities (eq 3-4): each component's group, each group's size and weight.
-        if groups is None:
-            groups, group_weights = [np.arange(n)], [1.0]
-        if group_weights is None or len(group_weights) != len(groups):
-            raise ValueError("group_weights must give one weight per group")
-        member = np.zeros((n, len(groups)))
-        for j, idx in enumerate(groups):
-            member[np.asarray(idx), j] = 1.0
-        if not np.array_equal(member.sum(axis=1), np.ones(n)):
-            raise ValueError("groups must cover every observation component exactly once")
-        w = np.asarray(group_weights, dtype=np.float64)
-        if np.any(w < 0) or w.sum() <= 0:
-            raise ValueError("group_weights must be non-negative with a positive sum")
-        self._group_of = member.argmax(axis=1).astype(np.int64)
-        self._group_size = member.sum(axis=0)
-        self._group_weight = w / w.sum()
+        group_of, self._group_size, self._group_weight = modalities(n, groups, group_weights)
+        self._group_of = group_of.astype(np.int64)
         # Memory (2.1), laid out as ebrl.kernels describes.
         self._inputs = np.zeros((n, M))
         self._action = np.zeros((M, self.action_dim))

@@ -40,6 +40,8 @@ import math
 import numpy as np
 from numba import njit
 
+from ebrl.similarity import modalities
+
 __all__ = ["QTableConfig", "QTable", "MFECConfig", "MFEC", "AGENTS", "discrete_actions",
            "nearest_action", "boltzmann", "confidence", "discounted_returns"]
 
@@ -171,25 +173,6 @@ def confidence(p):
     return a * float(np.dot(d, d)) / (a - 1)
 
 
-def _modalities(obs_dim, groups, group_weights):
-    """(group of each component, each group's size, normalised weights), checked as
-    ebrl.Agent checks them."""
-    n = obs_dim
-    if groups is None:
-        groups, group_weights = [np.arange(n)], [1.0]
-    if group_weights is None or len(group_weights) != len(groups):
-        raise ValueError("group_weights must give one weight per group")
-    member = np.zeros((n, len(groups)))
-    for j, idx in enumerate(groups):
-        member[np.asarray(idx), j] = 1.0
-    if not np.array_equal(member.sum(axis=1), np.ones(n)):
-        raise ValueError("groups must cover every observation component exactly once")
-    w = np.asarray(group_weights, dtype=np.float64)
-    if np.any(w < 0) or w.sum() <= 0:
-        raise ValueError("group_weights must be non-negative with a positive sum")
-    return member.argmax(axis=1), member.sum(axis=0), w / w.sum()
-
-
 class _Base:
     """Construction, input checks and the decision counters both learners share."""
 
@@ -204,7 +187,7 @@ class _Base:
         self.config, self.fallback = config, fallback
         self.obs_dim, self.action_dim = int(obs_dim), int(action_dim)
         self.rng = np.random.default_rng(seed)
-        self._group_of, self._group_size, self._group_weight = _modalities(
+        self._group_of, self._group_size, self._group_weight = modalities(
             self.obs_dim, groups, group_weights)
         self.actions = discrete_actions(self.action_dim, config.action_levels)
         self._exploration = float(config.exploration_rate)

@@ -22,3 +22,24 @@ def similarity(x, memory, variance, groups=None, weights=None):
         d2 = ((memory[:, idx] - x[idx]) ** 2 / variance[idx]).sum(axis=1)
         total += w * (1.0 - np.sqrt(d2 / (2 * len(idx))))
     return total / float(np.sum(weights))
+
+
+def modalities(obs_dim, groups, group_weights):
+    """eq 3's modalities of an obs_dim input: (the group of each component, each group's
+    size n_j, the weights w_j divided by their sum); groups None is one group of weight 1.
+    ValueError unless the groups cover every component once and the weights are
+    non-negative with a positive sum."""
+    n = obs_dim
+    if groups is None:
+        groups, group_weights = [np.arange(n)], [1.0]
+    if group_weights is None or len(group_weights) != len(groups):
+        raise ValueError("group_weights must give one weight per group")
+    member = np.zeros((n, len(groups)))
+    for j, idx in enumerate(groups):
+        member[np.asarray(idx), j] = 1.0
+    if not np.array_equal(member.sum(axis=1), np.ones(n)):
+        raise ValueError("groups must cover every observation component exactly once")
+    w = np.asarray(group_weights, dtype=np.float64)
+    if np.any(w < 0) or w.sum() <= 0:
+        raise ValueError("group_weights must be non-negative with a positive sum")
+    return member.argmax(axis=1), member.sum(axis=0), w / w.sum()
