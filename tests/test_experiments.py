@@ -385,3 +385,22 @@ def test_intrinsic_parameters_reach_the_fallback():
         assert all(fb(readings, rng)[0] == intrinsic.avoid_by_turning(readings) for _ in range(50))
     finally:
         env.close()
+
+
+@pytest.mark.parametrize("agent", ["qtable", "mfec"])
+def test_run_with_another_learner(tmp_path, agent):
+    out = tmp_path / "results"
+    proc = ebrl("run", "--agent", agent, "--robot", "paper", "--seeds", "0", "--steps", "300",
+                "--workers", "1", "--no-progress", "--out", out)
+    assert proc.returncode == 0, proc.stderr
+    for robot in ("two_wheel", "floating"):
+        run = out / f"{robot}.{agent}" / "avoidance" / "seed_000"
+        config = json.loads((run / "config.json").read_text())
+        assert config["learner"] == agent and "memory_decisions" in json.loads(
+            (run / "run.json").read_text())
+    groups = {(g["robot"], g["agent"]) for g in summary(out)["groups"]}
+    assert groups == {("two_wheel." + agent, agent), ("floating." + agent, agent)}
+    assert f"two_wheel.{agent}" in (out / "REPORT.md").read_text()
+    bad = ebrl("run", "--agent", agent, "--set", "policy_threshold=0.1", "--out",
+               tmp_path / "bad", check=False)
+    assert bad.returncode == 2 and f"not a parameter of the {agent} agent" in bad.stderr
