@@ -151,6 +151,7 @@ class WheelPhysics(navigation.Physics):
         #: Wheel radius (m) and half the track, the wheels' distance apart / 2 (m).
         self.wheel_radius = float(m.geom_size[geoms[0], 0])
         self.half_track = float(abs(m.body_pos[bodies[0], 1] - m.body_pos[bodies[1], 1]) / 2)
+        self._ramp_left = 0  # substeps left of the current phase's ramp
 
     def _wheel_speeds(self, left, right, n):
         """Turns the wheels by (left, right) rad over the ramp of an n-substep phase."""
@@ -172,7 +173,7 @@ class WheelPhysics(navigation.Physics):
 
     def step(self, nstep=1):
         """Steps through the phase: the ramp, then the wheels settle at rest targets."""
-        ramp = min(getattr(self, "_ramp_left", 0), nstep)
+        ramp = min(self._ramp_left, nstep)
         if ramp:
             super().step(ramp)
             self._ramp_left -= ramp
