@@ -139,7 +139,7 @@ class Floating(navigation.Navigation):
 
 def substeps(timestep, time_scale=1.0):
     """Substeps per agent step."""
-    return max(2, round(STEP_SECONDS * time_scale / timestep))
+    return max(2, navigation.substeps(STEP_SECONDS * time_scale, timestep))
 
 
 def move_substeps(timestep, time_scale=1.0):

@@ -99,6 +99,11 @@ def edit_model(spec, config):
             geom.size[0] = config.radius * UNIT
 
 
+def substeps(seconds, timestep):
+    """Whole substeps of `timestep` in `seconds` (at least one)."""
+    return max(1, round(seconds / timestep))
+
+
 def _id(model, kind, name):
     return mujoco.mj_name2id(model.ptr, kind, PREFIX + name)
 

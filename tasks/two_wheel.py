@@ -28,10 +28,8 @@ MOVE_SECONDS = 0.4
 # A move that falls short of its command by more than this (units) was stopped.
 BLOCKED_TOLERANCE = 0.1
 
-
-def substeps(seconds, timestep):
-    """Whole substeps of `timestep` in `seconds` (at least one)."""
-    return max(1, round(seconds / timestep))
+MISSING_ACTUATORS = ("the two_wheel drive needs actuators 'forward' and 'turn' (a planar "
+                     "base) or 'left_wheel' and 'right_wheel' (wheels)")
 
 
 class Physics(navigation.Physics):
@@ -44,9 +42,7 @@ class Physics(navigation.Physics):
         ids = {name: navigation._id(m, navigation.mujoco.mjtObj.mjOBJ_ACTUATOR, name)
                for name in ("forward", "turn", "grip")}
         if ids["forward"] < 0 or ids["turn"] < 0:
-            raise navigation.ContractError(
-                "the two_wheel drive needs actuators 'forward' and 'turn' (a planar base) "
-                "or 'left_wheel' and 'right_wheel' (wheels)")
+            raise navigation.ContractError(MISSING_ACTUATORS)
         self._forward, self._turn = ids["forward"], ids["turn"]
         # Deadbeat servos: kv = driven inertia / timestep reaches the target speed in one
         # semi-implicit Euler step. The base's mass drives forward and grip, its yaw
@@ -87,8 +83,8 @@ class TwoWheel(navigation.Navigation):
 
     def initialize_episode(self, physics):
         dt = physics.timestep
-        self._n_turn = substeps(TURN_SECONDS * self.time_scale, dt)
-        self._n_move = substeps(MOVE_SECONDS * self.time_scale, dt)
+        self._n_turn = navigation.substeps(TURN_SECONDS * self.time_scale, dt)
+        self._n_move = navigation.substeps(MOVE_SECONDS * self.time_scale, dt)
         physics.step_seconds = (self._n_turn + self._n_move) * dt
         super().initialize_episode(physics)
 
@@ -119,7 +115,7 @@ class TwoWheel(navigation.Navigation):
 
 def move_substeps(timestep, time_scale=1.0):
     """Substeps the environment runs per agent step: the move phase."""
-    return substeps(MOVE_SECONDS * time_scale, timestep)
+    return navigation.substeps(MOVE_SECONDS * time_scale, timestep)
 
 
 class WheelPhysics(navigation.Physics):
@@ -139,9 +135,7 @@ class WheelPhysics(navigation.Physics):
         ids = [navigation._id(m, navigation.mujoco.mjtObj.mjOBJ_ACTUATOR, name)
                for name in ("left_wheel", "right_wheel")]
         if min(ids) < 0:
-            raise navigation.ContractError(
-                "the two_wheel drive needs actuators 'forward' and 'turn' (a planar base) "
-                "or 'left_wheel' and 'right_wheel' (wheels)")
+            raise navigation.ContractError(MISSING_ACTUATORS)
         joints = [int(m.actuator_trnid[i, 0]) for i in ids]
         bodies = [int(m.jnt_bodyid[j]) for j in joints]
         geoms = [int(np.flatnonzero(m.geom_bodyid == b)[0]) for b in bodies]
