@@ -64,12 +64,12 @@ class Config:
     intrinsic_random_rate: float = 0.2
     random_sd: float = 0.5
     # Readings with a credible alternative, as switches (READINGS above; default first).
-    episode: str = "trial"
-    recall_at_trial_end: str = "empty"
-    eq7_scope: str = "to_start"
-    forgetting: str = "least_reliable"
-    eq9_dead_zone: str = "zero"          # the fallback's (ebrl.intrinsic.fallback_for)
-    random_in_avoidance: str = "replace"  # the fallback's (ebrl.intrinsic.fallback_for)
+    episode: str = READINGS["episode"][0]
+    recall_at_trial_end: str = READINGS["recall_at_trial_end"][0]
+    eq7_scope: str = READINGS["eq7_scope"][0]
+    forgetting: str = READINGS["forgetting"][0]
+    eq9_dead_zone: str = READINGS["eq9_dead_zone"][0]  # the fallback's (intrinsic.fallback_for)
+    random_in_avoidance: str = READINGS["random_in_avoidance"][0]  # likewise
 
     def __post_init__(self):
         for name in ("memory_size", "recall_size"):

@@ -13,7 +13,7 @@ import functools
 
 import numpy as np
 
-from ebrl.config import check_reading
+from ebrl.config import READINGS, check_reading
 
 THETA = 0.25  # eq 9's sensitivity threshold for the floating robot
 
@@ -136,8 +136,9 @@ CONDITIONS = ("random", "avoidance")
 DEAD_ZONE = ("eq9-10",)
 
 
-def fallback_for(behaviour, condition, random_rate=0.2, sd=0.5, *, eq9_dead_zone="zero",
-                 random_in_avoidance="replace"):
+def fallback_for(behaviour, condition, random_rate=0.2, sd=0.5, *,
+                 eq9_dead_zone=READINGS["eq9_dead_zone"][0],
+                 random_in_avoidance=READINGS["random_in_avoidance"][0]):
     """The fallback of Section 3.6's condition ("random": the random walk only,
     "avoidance": the intrinsic behaviour `behaviour`, a key of BEHAVIOURS, with the
     random action at random_rate), acting in the behaviour's action dimension.

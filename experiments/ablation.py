@@ -12,7 +12,9 @@ import dataclasses
 import json
 import pathlib
 
+from ebrl.config import READINGS as AGENT_READINGS
 from experiments import paper, report, results, runner
+from tasks.config import BUMPS
 
 
 @dataclasses.dataclass(frozen=True)
@@ -24,20 +26,22 @@ class Reading:
     what: str = ""
 
 
+#: The switches' values come from where they are defined (ebrl.config.READINGS,
+#: tasks.config.BUMPS); the numbers tried for the numeric ones are the ablation's own.
 READINGS = (
-    Reading("bump", ("grip", "stop", "slide", "bounce"), drives=("floating",),
+    Reading("bump", BUMPS, drives=("floating",),
             what="the floating robot at a wall"),
-    Reading("eq9_dead_zone", ("zero", "keep"), drives=("floating",), conditions=("avoidance",),
+    Reading("eq9_dead_zone", AGENT_READINGS["eq9_dead_zone"], drives=("floating",), conditions=("avoidance",),
             what="eq 9's 'not changed': zero acceleration, or the previous one kept"),
-    Reading("random_in_avoidance", ("replace", "add"), conditions=("avoidance",),
+    Reading("random_in_avoidance", AGENT_READINGS["random_in_avoidance"], conditions=("avoidance",),
             what="the 20% random action replaces, or is added to, the avoidance action"),
-    Reading("episode", ("trial", "continuing"),
+    Reading("episode", AGENT_READINGS["episode"],
             what="an episode is one trial, or one continuing episode across trials"),
-    Reading("recall_at_trial_end", ("empty", "keep"), what="the recall table at a trial's end"),
+    Reading("recall_at_trial_end", AGENT_READINGS["recall_at_trial_end"], what="the recall table at a trial's end"),
     Reading("initial_reliability", (1.0, 0.5, 0.0), what="a new element's reliability"),
-    Reading("eq7_scope", ("to_start", "decided_only"),
+    Reading("eq7_scope", AGENT_READINGS["eq7_scope"],
             what="eq 7 walks to the episode's start, or changes only deciding elements"),
-    Reading("forgetting", ("least_reliable", "oldest"), what="which element a full memory forgets"),
+    Reading("forgetting", AGENT_READINGS["forgetting"], what="which element a full memory forgets"),
     Reading("radius", (None, 1.0, 2.5), what="the robot's radius in units (None: its file's 1.5)"),
     Reading("policy_threshold", (0.0, 0.05, 0.2), what="eq 5's measure must exceed this"),
 )

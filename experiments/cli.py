@@ -12,8 +12,6 @@ import sys
 
 from experiments import paper, validate
 
-#: The learners of `--agent` (experiments.protocol.AGENTS, without importing it here).
-AGENTS = ("ebrl", "qtable", "mfec")
 USAGE_ERROR = 2
 RUNS_FAILED = 1
 INTERRUPTED = 130
@@ -116,6 +114,7 @@ def _override(text):
 
 
 def build_parser():
+    from experiments.protocol import AGENTS
     p = _Parser(prog="ebrl", description=__doc__)
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 

@@ -69,7 +69,7 @@ class RunSpec:
 
     def parameters(self):
         """Everything that determines the run's result; a rerun matches on this."""
-        entry = self.entry
+        entry, task = self.entry, self.task_config()
         return {
             "protocol_version": PROTOCOL_VERSION,
             "robot": self.label,
@@ -83,8 +83,8 @@ class RunSpec:
             "agent": dataclasses.asdict(self.agent_config()),
             "avoidance": entry.avoidance,
             "modalities": [list(m) for m in entry.modalities],
-            "task": dataclasses.asdict(self.task_config()),
-            "model_sha256": model_digest(entry, self.task_config()),
+            "task": dataclasses.asdict(task),
+            "model_sha256": model_digest(entry, task),
         }
 
 
@@ -101,17 +101,15 @@ def model_digest(entry, task_config):
 
 
 #: The learners `ebrl run --agent` knows: the paper's, then the baselines of Section 4.
-AGENTS = ("ebrl", "qtable", "mfec")
+LEARNERS = {"ebrl": (ebrl.Config, ebrl.Agent), **ebrl.baselines.AGENTS}
+AGENTS = tuple(LEARNERS)
 
 
 def agent_classes(name):
     """(config class, agent class) of a learner of AGENTS."""
-    if name == "ebrl":
-        return ebrl.Config, ebrl.Agent
-    if name not in AGENTS:
+    if name not in LEARNERS:
         raise ValueError(f"unknown agent {name!r}; valid: {', '.join(AGENTS)}")
-    from ebrl.baselines import AGENTS as BASELINES
-    return BASELINES[name]
+    return LEARNERS[name]
 
 
 def seeds_for(seed):
@@ -134,10 +132,13 @@ def make_agent(spec, env):
         weights = [w for _, w in entry.modalities]
     _, agent_seed = seeds_for(spec.seed)
     config = spec.agent_config()
-    fallback = ebrl.intrinsic.fallback_for(
-        entry.avoidance, spec.condition, config.intrinsic_random_rate, config.random_sd,
-        eq9_dead_zone=getattr(config, "eq9_dead_zone", "zero"),
-        random_in_avoidance=getattr(config, "random_in_avoidance", "replace"))
+    # The fallback's own readings, where the learner's config has them (EBRL's does; the
+    # baselines take fallback_for's defaults, which are EBRL's defaults).
+    switches = {k: getattr(config, k) for k in ("eq9_dead_zone", "random_in_avoidance")
+                if hasattr(config, k)}
+    fallback = ebrl.intrinsic.fallback_for(entry.avoidance, spec.condition,
+                                           config.intrinsic_random_rate, config.random_sd,
+                                           **switches)
     _, agent_cls = agent_classes(spec.agent)
     return agent_cls(config, sum(sizes), env.action_spec().shape[0], fallback,
                      groups=groups, group_weights=weights, seed=agent_seed)

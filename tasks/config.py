@@ -25,7 +25,7 @@ class TaskConfig:
     #: the wall and most along it), "stop" (the velocity set to zero at contact),
     #: "slide" (frictionless walls: the motion along the wall is kept), "bounce" (the
     #: velocity reflected off the wall, elastically). Two-wheel robots ignore it.
-    bump: str = "grip"
+    bump: str = BUMPS[0]
     #: The robot's radius in units; None keeps its file's (1.5 for the paper's robots).
     radius: float = None
 
