@@ -1,5 +1,5 @@
 """The `ebrl` command (also `python -m experiments`): robots, run, report, render, bench,
-check, sweep, demo.
+check, sweep, ablate, fit, demo.
 
 Exit status: 0 done; 1 some runs failed (each recorded in its run.json, named by the
 report, retried by a rerun); 2 a bad argument (one line, nothing written); 130 Ctrl-C
@@ -201,6 +201,42 @@ def build_parser():
     a.add_argument("--results", type=pathlib.Path, default=None, metavar="RESULTS.md",
                    help="also regenerate this page's Ablation block")
     a.add_argument("--no-progress", action="store_true")
+
+    f = sub.add_parser("fit", help="search the paper's unwritten readings against its table "
+                                   "(an Optuna study; resumable)")
+    f.add_argument("--trials", type=_up_to(MAX_TRIALS), default=150,
+                   help="finished trials the study should hold (default: %(default)s); the "
+                        "same command continues a study")
+    f.add_argument("--seeds", type=parse_seeds, default=[0, 1],
+                   help="every trial's seeds (default: 0-1)")
+    f.add_argument("--promote-seeds", type=parse_seeds, default=list(range(6)),
+                   help="a promoted trial's seeds, including --seeds (default: 0-5)")
+    f.add_argument("--promote", type=_argument(lambda t: validate.fraction(t, "--promote")),
+                   default=0.1, help="the share of trials promoted (default: %(default)s)")
+    f.add_argument("--batch", type=_up_to(64), default=4,
+                   help="trials asked and run together (default: %(default)s)")
+    f.add_argument("--space", default="all",
+                   help="comma-separated readings to search (default: all; see FIT.md)")
+    f.add_argument("--steps", type=_up_to(validate.MAX_STEPS), default=None,
+                   help="agent steps per run (default: each robot's budget)")
+    f.add_argument("--storage", default=None,
+                   help="an Optuna storage URL (postgresql://..., mysql://...) or an SQLite "
+                        "file (default: OUT/study.db)")
+    f.add_argument("--study", default=None, help="the study's name (default: fit)")
+    f.add_argument("--sampler-seed", type=_argument(lambda t: validate.integer(t, 0, 2**31 - 1)),
+                   default=0)
+    f.add_argument("--validate", type=parse_seeds, default=None, metavar="SEEDS",
+                   help="then run the best trial (or --trial) and the defaults on these "
+                        "seeds, which the search must not use (e.g. 100-149)")
+    f.add_argument("--trial", type=_argument(lambda t: validate.integer(t, 0, 10**9)),
+                   default=None, help="the trial --validate runs (default: the best)")
+    f.add_argument("--workers", type=_up_to(validate.MAX_WORKERS), default=os.cpu_count() or 1)
+    f.add_argument("--backend", type=_choice(("local", "ray")), default="local")
+    f.add_argument("--out", type=pathlib.Path, default=pathlib.Path("fit"))
+    f.add_argument("--results", type=pathlib.Path, default=None, metavar="RESULTS.md",
+                   help="also regenerate this page's Search block")
+    f.add_argument("--figures", type=pathlib.Path, default=pathlib.Path("docs/figures"))
+    f.add_argument("--no-progress", action="store_true")
 
     d = sub.add_parser("demo", help="a quick protocol, its report and one video")
     d.add_argument("--out", type=pathlib.Path, default=pathlib.Path("demo_results"))
@@ -476,6 +512,83 @@ def cmd_ablate(args):
     return _finish("ablation", path, failed)
 
 
+MAX_TRIALS = 100_000
+
+
+def _fit_args(args):
+    """Every `ebrl fit` argument checked before any work: (space names, storage URL)."""
+    from experiments import fit, study
+    names = tuple(fit.BY_NAME) if args.space == "all" else \
+        tuple(n.strip() for n in args.space.split(",") if n.strip())
+    unknown = [n for n in names if n not in fit.BY_NAME]
+    if unknown or not names:
+        raise ValueError(f"unknown reading {unknown[0] if unknown else args.space!r} in --space; "
+                         f"valid: {', '.join(fit.BY_NAME)}")
+    if not set(args.seeds) <= set(args.promote_seeds):
+        raise ValueError("--promote-seeds must include every seed of --seeds")
+    if args.validate is not None and set(args.validate) & set(args.promote_seeds):
+        raise ValueError("--validate seeds must be seeds the search never uses (not in "
+                         "--seeds or --promote-seeds)")
+    if args.trial is not None and args.validate is None:
+        raise ValueError("--trial chooses the trial --validate runs; give --validate too")
+    validate.output_folder(args.out, "--out")
+    if args.results is not None:
+        validate.output_file(args.results, "--results")
+        validate.output_folder(args.figures, "--figures")
+    _check_backend(args.backend)
+    url = study.storage_url(args.storage, args.out)
+    if args.storage is None:
+        pass  # OUT/study.db: --out is checked above
+    elif url.startswith("sqlite:///"):
+        validate.output_file(pathlib.Path(url[len("sqlite:///"):]), "--storage")
+    else:
+        import sqlalchemy.engine
+        try:
+            sqlalchemy.engine.make_url(url)
+        except Exception as e:  # sqlalchemy's ArgumentError: not a URL
+            raise ValueError(f"bad --storage {args.storage!r}: {e}") from None
+    return names, url
+
+
+def cmd_fit(args):
+    try:
+        names, url = _fit_args(args)
+    except ValueError as e:
+        return _fail(str(e))
+    from experiments import fit, results, study
+    rungs = (tuple(args.seeds),) if args.seeds == args.promote_seeds else \
+        (tuple(args.seeds), tuple(args.promote_seeds))
+    problem = fit.Problem(names=names, rungs=rungs, steps=args.steps)
+    args.out.mkdir(parents=True, exist_ok=True)
+    try:
+        s = study.load(args.study or fit.STUDY_NAME, url, args.out, args.sampler_seed)
+    except Exception as e:  # a storage that cannot be opened: one line
+        return _fail(f"cannot open the study storage {url}: {results.error_line(e)}")
+    try:
+        if not s.get_trials(deepcopy=False):  # the defaults first, as trial 0
+            s.enqueue_trial({n: fit.default(n) for n in names})
+        outcome = study.optimize(problem, s, args.out, args.trials, batch=args.batch,
+                                 workers=args.workers, backend=args.backend,
+                                 promote=args.promote, progress=not args.no_progress)
+        failed = [(f"trial {n}", e) for n, e in outcome.failed]
+        if args.validate is not None:
+            best = study.best_trials(s, 1) if args.trial is None else \
+                [t for t in s.trials if t.number == args.trial and "rungs" in t.user_attrs]
+            if not best:
+                return _fail(f"no complete trial {'to validate' if args.trial is None else args.trial}")
+            params = {k: v for k, v in best[0].params.items() if k in names}
+            _, lost = fit.validate_best(problem, params, args.out, args.validate, args.workers,
+                                        args.backend, not args.no_progress)
+            failed += [(s_.name, e) for s_, e in lost]
+        path = fit.write(s, args.out, names)
+        if args.results is not None:
+            print(f"published: {fit.publish(s, args.out, names, args.results, args.figures)}")
+    except results.ResultsError as e:
+        return _fail(str(e))
+    print(f"{outcome.made} trials made now, {outcome.total} in the study ({url})")
+    return _finish("fit", path, failed)
+
+
 def cmd_demo(args):
     """A quick protocol: the paper's robots, 6 seeds at a fifth of their budgets (at least
     10,000 steps), then the report and one video."""
@@ -509,7 +622,7 @@ def main(argv=None):
         args = build_parser().parse_args(argv)
         return {"robots": cmd_robots, "run": cmd_run, "report": cmd_report,
                 "render": cmd_render, "bench": cmd_bench, "check": cmd_check,
-                "sweep": cmd_sweep, "ablate": cmd_ablate,
+                "sweep": cmd_sweep, "ablate": cmd_ablate, "fit": cmd_fit,
                 "demo": cmd_demo}[args.command](args)
     except KeyboardInterrupt:
         print("ebrl: interrupted; finished runs are kept, rerun to resume", file=sys.stderr)

@@ -51,10 +51,17 @@ def plan(robots, conditions, seeds, steps=None, overrides=(), drive=None, agent=
     return sorted(specs, key=lambda s: -s.steps)
 
 
+def folder_of(out):
+    """out as a function spec -> results folder: a folder for every spec, or a function
+    already (a study keeps each setting's runs in its own folder)."""
+    return out if callable(out) else (lambda spec: out)
+
+
 def pending(out, specs):
-    """The specs without a matching complete run under out, failed ones included
-    (ResultsError if damaged)."""
-    return [s for s in specs if results.existing(out, s) != "done"]
+    """The specs without a matching complete run under out (a folder, or a function
+    spec -> folder), failed ones included (ResultsError if damaged)."""
+    where = folder_of(out)
+    return [s for s in specs if results.existing(where(s), s) != "done"]
 
 
 def _selected(variable, spec):
@@ -78,8 +85,10 @@ def _in_worker():
 
 
 def run(specs, out, *, workers=None, backend="local", progress=True):
-    """Runs the specs not yet done under out (failed ones again); returns a Ran."""
-    todo = pending(out, specs)
+    """Runs the specs not yet done under out (a folder, or a function spec -> folder;
+    failed ones again); returns a Ran."""
+    where = folder_of(out)
+    todo = pending(where, specs)
     if not todo:
         return Ran(0, len(specs), [])
     versions = results.versions()
@@ -95,9 +104,9 @@ def run(specs, out, *, workers=None, backend="local", progress=True):
     def done(spec, result=None, error=None):
         nonlocal steps_done
         if error is not None:
-            failed.append((spec, results.write_failure(out, spec, error)))
+            failed.append((spec, results.write_failure(where(spec), spec, error)))
         else:
-            results.write_run(out, spec, result, versions)
+            results.write_run(where(spec), spec, result, versions)
             steps_done += spec.steps
         if bar is not None:
             rate = steps_done / max(time.perf_counter() - started, 1e-9)

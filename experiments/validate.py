@@ -62,6 +62,17 @@ def integer(text, lo, hi):
     return value
 
 
+def fraction(text, option):
+    """A number in (0, 1]."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise ValueError(f"{option} must be a number, got {text!r}") from None
+    if not (0.0 < value <= 1.0):
+        raise ValueError(f"{option} must be in (0, 1], got {text!r}")
+    return value
+
+
 def _setting_classes():
     """The config classes whose fields --set may name: every learner's, then the task's."""
     from experiments import protocol

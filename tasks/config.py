@@ -7,6 +7,11 @@ import math
 
 #: The floating drive's bump readings (docs/interpretation.md, "Floating bump").
 BUMPS = ("grip", "stop", "slide", "bounce")
+#: The floating drive's thrust readings (docs/interpretation.md, "Floating thrust").
+THRUSTS = ("scaled", "demand", "clipped")
+#: The floating drive's velocity sensing: as measured, or through a 0-255 code like the
+#: rangefinders' (docs/interpretation.md, "Velocity sensing").
+VELOCITY_CODES = ("none", "code")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -28,12 +33,28 @@ class TaskConfig:
     bump: str = BUMPS[0]
     #: The robot's radius in units; None keeps its file's (1.5 for the paper's robots).
     radius: float = None
+    #: The floating drive's velocity change per step for a demand a in [-1, 1]:
+    #: "scaled" 0.2 a (Section 3.3's maximum of 0.2 units per square step), "demand" a
+    #: itself (Section 3.3's example read literally), "clipped" a clipped to [-0.2, 0.2].
+    thrust: str = THRUSTS[0]
+    #: The floating bumper's sliding friction against the walls (None: its file's, 1);
+    #: acts with the bump reading "grip".
+    wall_friction: float = None
+    #: The share of the speed into a wall that the bump reading "bounce" reflects (1:
+    #: elastic, 0: the motion into the wall stops, the motion along it is kept).
+    restitution: float = 1.0
+    #: The floating drive's velocity reading: Gaussian noise of this sd (units/step), then
+    #: "none" (the value as it is) or "code" (the 0-255 code of the velocity over
+    #: +-VELOCITY_FULL_SCALE, decoded back to units/step).
+    velocity_noise: float = 0.0
+    velocity_code: str = VELOCITY_CODES[0]
 
     def __post_init__(self):
         for name in ("sensor_range", "sensor_noise", "action_noise", "start_jitter_xy",
-                     "start_jitter_heading", "radius"):
+                     "start_jitter_heading", "radius", "wall_friction", "restitution",
+                     "velocity_noise"):
             v = getattr(self, name)
-            if v is None and name == "radius":
+            if v is None and name in ("radius", "wall_friction"):
                 continue
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
                 raise ValueError(f"{name} must be a finite number, got {v!r}")
@@ -45,5 +66,8 @@ class TaskConfig:
             raise ValueError(f"radius must be at most 5 units (the corridors are 10 wide), got {self.radius!r}")
         if not isinstance(self.start_jitter, bool):
             raise ValueError(f"start_jitter must be true or false, got {self.start_jitter!r}")
-        if self.bump not in BUMPS:
-            raise ValueError(f"bump must be one of {', '.join(BUMPS)}, got {self.bump!r}")
+        if self.restitution > 1:
+            raise ValueError(f"restitution must be at most 1, got {self.restitution!r}")
+        for name, valid in (("bump", BUMPS), ("thrust", THRUSTS), ("velocity_code", VELOCITY_CODES)):
+            if getattr(self, name) not in valid:
+                raise ValueError(f"{name} must be one of {', '.join(valid)}, got {getattr(self, name)!r}")

@@ -7,12 +7,16 @@ actuators ``thrust_x`` and ``thrust_y`` push along the world's x and y axes
 (motors on slide joints, or on a site with a world-fixed reference site).
 """
 import mujoco
+import numpy as np
 
 import models
 from models import UNIT
 from tasks import navigation
 
 MAX_ACCELERATION = 0.2  # units per step, per step
+#: The velocity code's full scale (TaskConfig.velocity_code "code"), in units/step: the
+#: two-wheel robot's longest move per step, a speed the puck rarely exceeds.
+VELOCITY_FULL_SCALE = 2.0
 
 # Seconds per agent step; the thrust acts during its first substep, then the robot
 # coasts for the rest. At the planar robots' 0.05 s timestep: 10 substeps.
@@ -21,12 +25,16 @@ STEP_SECONDS = 0.5
 
 def edit_model(spec, config):
     """The radius (navigation.edit_model) and the walls of the bump reading: "slide" and
-    "bounce" make the bumper frictionless (condim 1); "grip" and "stop" keep its file's."""
+    "bounce" make the bumper frictionless (condim 1); "grip" and "stop" keep its file's,
+    with wall_friction, when given, as its sliding friction."""
     navigation.edit_model(spec, config)
+    hull = spec.geom(models.PREFIX + "hull")
+    if hull is None:
+        return
     if config.bump in ("slide", "bounce"):
-        hull = spec.geom(models.PREFIX + "hull")
-        if hull is not None:
-            hull.condim = 1
+        hull.condim = 1
+    elif config.wall_friction is not None:
+        hull.friction[0] = config.wall_friction
 
 
 class Physics(navigation.Physics):
@@ -48,8 +56,10 @@ class Physics(navigation.Physics):
         self._mass = float(m.body_subtreemass[self._base])
         self._hull = navigation._id(m, mujoco.mjtObj.mjOBJ_GEOM, "hull")
         #: The bump reading applied after each substep: None ("grip", "slide": the
-        #: contact's physics alone), "stop" or "bounce"; set by the task.
+        #: contact's physics alone), "stop" or "bounce"; set by the task, with the
+        #: share of the speed into the wall that "bounce" reflects.
         self.bump = None
+        self.restitution = 1.0
 
     def _hull_contact(self):
         """The contact normal pointing from the wall into the robot, or None."""
@@ -65,7 +75,8 @@ class Physics(navigation.Physics):
     def step(self, nstep=1):
         """Substeps; with "stop" or "bounce", a substep that brings the bumper into a wall
         while moving towards it is undone (no contact forces act, nothing sinks in), and
-        the velocity becomes 0 ("stop") or its mirror image off the wall ("bounce")."""
+        the velocity becomes 0 ("stop") or its mirror image off the wall ("bounce", the
+        part into the wall scaled by the restitution)."""
         if self.bump is None:
             return super().step(nstep)
         qpos, qvel = self._qpos, self._qvel
@@ -83,7 +94,8 @@ class Physics(navigation.Physics):
             if self.bump == "stop":
                 qvel[:] = 0.0
             else:
-                self._set_planar_velocity(vx - 2 * into * normal[0], vy - 2 * into * normal[1])
+                back = (1.0 + self.restitution) * into
+                self._set_planar_velocity(vx - back * normal[0], vy - back * normal[1])
             self.forward()
 
     def _planar_velocity(self, qvel):
@@ -121,17 +133,42 @@ class Floating(navigation.Navigation):
     def initialize_episode(self, physics):
         physics.step_seconds = substeps(physics.timestep, self.time_scale) * physics.timestep
         physics.bump = self.config.bump if self.config.bump in ("stop", "bounce") else None
+        physics.restitution = self.config.restitution
         super().initialize_episode(physics)
 
     def get_observation(self, physics):
         obs = super().get_observation(physics)
-        obs["velocity"] = physics.robot_velocity()
+        obs["velocity"] = self.sense_velocity(physics)
         return obs
+
+    def sense_velocity(self, physics):
+        """The velocity reading (units/step): with velocity_noise, plus Gaussian noise of
+        that sd; with velocity_code "code", through the 0-255 code over
+        +-VELOCITY_FULL_SCALE and back (Section 3.2's encoding applied to a velocity)."""
+        v = physics.robot_velocity()
+        config = self.config
+        if config.velocity_noise > 0:
+            v = v + self.random.normal(0.0, config.velocity_noise, size=2)
+        if config.velocity_code == "code":
+            half = navigation.SENSOR_LEVELS / 2
+            code = np.rint(np.clip(v / VELOCITY_FULL_SCALE, -1.0, 1.0) * half + half)
+            v = (code - half) / half * VELOCITY_FULL_SCALE
+        return v
+
+    def demand(self, a):
+        """The velocity change (units/step) for a demand a in [-1, 1], by the thrust
+        reading: "scaled" 0.2 a, "demand" a, "clipped" a clipped to [-0.2, 0.2]."""
+        thrust = self.config.thrust
+        if thrust == "scaled":
+            return MAX_ACCELERATION * a
+        if thrust == "demand":
+            return a
+        return min(max(a, -MAX_ACCELERATION), MAX_ACCELERATION)
 
     def before_step(self, action, physics):
         ah, av = self.checked_action(action)
         nh, nv = self.noise_factors()
-        physics.thrust(MAX_ACCELERATION * ah * nh, MAX_ACCELERATION * av * nv)
+        physics.thrust(self.demand(ah) * nh, self.demand(av) * nv)
         physics.step(1)
         physics.thrust(0.0, 0.0)
         # The environment then coasts for the other substeps.

@@ -1,0 +1,379 @@
+"""`ebrl fit`: a search over the readings the paper leaves open, against its Section 3.6 table.
+
+The space (SPACE) is every switch of ebrl.config.READINGS and tasks.config's readings,
+plus the continuous readings the paper leaves open; Table 1, the room, the rangefinders
+(range 14, noise sd 12.75, 7 and 8 of them) and the actions' maxima stay fixed. A reading
+of the agent (ebrl.Config) is shared by both robots; a reading of the floating drive
+applies to the floating robot only, so the two-wheel runs of two trials that differ only
+there are the same runs (made once; experiments.study).
+
+The objective (objective()) is the distance of a trial's Section 3.6 figures to the
+paper's, one term per figure, plus a penalty per failing claim (report.claims):
+
+    mean over figures of (log(ours / paper) / scale)^2  +  CLAIM_PENALTY x failing claims
+
+with scale = log(1 + sd / mean) of the paper's own figure (the spread of one seed's
+figure, as the paper reports it) for first-trial steps and steps per trial, and
+SHRINK_SCALE for the shrinks (the paper gives no spread). A figure the trial cannot
+compute (no run reached the goal) costs MISSING_TERM.
+"""
+import dataclasses
+import json
+import math
+import pathlib
+
+from ebrl.config import READINGS as AGENT_READINGS
+from experiments import paper, report, results, study
+from tasks.config import BUMPS, THRUSTS, VELOCITY_CODES
+
+STUDY_NAME = "fit"
+#: The robots of a trial: the floating robot searched, the two-wheel robot its constraint.
+ROBOTS = ("two_wheel", "floating")
+SHRINK_SCALE = 0.3
+MISSING_TERM = 25.0
+CLAIM_PENALTY = 1.0
+FIGURES = ("first_trial_steps", "steps_per_trial", "shrink")
+
+
+@dataclasses.dataclass(frozen=True)
+class Param:
+    name: str       # a field of ebrl.Config or tasks.TaskConfig
+    kind: str       # "choice" or "float"
+    values: tuple   # the choices, or (low, high)
+    scope: str      # "both" (an agent reading) or "floating" (the floating drive's)
+    what: str
+
+    def distribution(self):
+        import optuna
+        if self.kind == "choice":
+            return optuna.distributions.CategoricalDistribution(self.values)
+        return optuna.distributions.FloatDistribution(*self.values)
+
+
+def _switch(name, scope="both", what=""):
+    return Param(name, "choice", AGENT_READINGS[name], scope, what)
+
+
+#: The search space. The ranges: policy_threshold up to 0.5 (0.3-0.4 moved the floating
+#: learners most in a first trial, DEVELOPERS.md); a radius from the two-wheel body's
+#: smallest credible size to the ablation's largest; action noise up to 50% (the paper
+#: gives the floating robot none); velocity noise up to 0.2 units/step (one full thrust).
+SPACE = (
+    _switch("episode", what="an episode is one trial, or continues across trials"),
+    _switch("recall_at_trial_end", what="the recall table at a trial's end"),
+    _switch("eq7_scope", what="eq 7 to the episode's start, or deciding elements only"),
+    _switch("forgetting", what="which element a full memory forgets"),
+    _switch("random_in_avoidance", what="the 20% random action replaces or is added"),
+    _switch("eq9_dead_zone", "floating", "eq 9's 'not changed': kept, or zero"),
+    Param("policy_threshold", "float", (0.0, 0.5), "both", "eq 5's measure must exceed this"),
+    Param("initial_reliability", "float", (0.0, 1.0), "both", "a new element's reliability"),
+    Param("bump", "choice", BUMPS, "floating", "the floating robot at a wall"),
+    Param("thrust", "choice", THRUSTS, "floating", "the velocity change for a demand"),
+    Param("action_noise", "float", (0.0, 0.5), "floating", "the floating drive's action noise"),
+    Param("velocity_noise", "float", (0.0, 0.2), "floating", "velocity reading noise, units/step"),
+    Param("velocity_code", "choice", VELOCITY_CODES, "floating", "velocity as is, or 0-255 coded"),
+    Param("wall_friction", "float", (0.0, 1.5), "floating", "the bumper's friction (with grip)"),
+    Param("restitution", "float", (0.0, 1.0), "floating", "the share reflected (with bounce)"),
+    Param("radius", "float", (1.0, 2.5), "floating", "the floating robot's radius, units"),
+)
+BY_NAME = {p.name: p for p in SPACE}
+
+
+def default(name):
+    """The current default of a reading (validate.setting_default: the config's field;
+    the file's radius 1.5 and friction 1 where the field's default is None)."""
+    from experiments import validate
+    value = validate.setting_default(name)
+    return {"radius": 1.5, "wall_friction": 1.0}.get(name, value) if value is None else value
+
+
+def overrides(params, robot):
+    """A trial's settings for one robot, as sorted (name, value) pairs, defaults left out
+    (so a setting equal to the defaults shares their runs)."""
+    from tasks.robots import resolve
+    floating = resolve(robot).drive == "floating"
+    chosen = {k: v for k, v in params.items()
+              if (BY_NAME[k].scope == "both" or floating) and v != default(k)}
+    return tuple(sorted(chosen.items()))
+
+
+@dataclasses.dataclass
+class Problem:
+    """`ebrl fit` for experiments.study: the space, a trial's runs, its score."""
+    names: tuple = tuple(BY_NAME)
+    rungs: tuple = ((0, 1), tuple(range(6)))
+    steps: int = None  # None: each robot's budget
+
+    def distributions(self):
+        return {n: BY_NAME[n].distribution() for n in self.names}
+
+    def specs(self, params, seeds):
+        from experiments import runner
+        out = []
+        for robot in ROBOTS:
+            out += runner.plan((robot,), paper.CONDITIONS, seeds, self.steps,
+                               overrides(params, robot))
+        return out
+
+    def score(self, params, runs):
+        summary = results.summarize(runs)
+        value, terms, claims = objective(summary)
+        return value, {"figures": figures(summary), "terms": terms,
+                       "claims": [[c, o, bool(h)] for c, o, h in claims]}
+
+
+def figures(summary):
+    """{'robot/condition/figure': our mean} of a summary's groups."""
+    out = {}
+    for g in summary["groups"]:
+        for f in FIGURES:
+            value = g[f] if f == "shrink" else g[f]["mean"]
+            out[f"{g['robot']}/{g['condition']}/{f}"] = value
+    return out
+
+
+def scale(drive, condition, figure):
+    """The scale of a figure's log ratio (module docstring)."""
+    ref = paper.RESULTS[(drive, condition)][figure]
+    if figure == "shrink":
+        return SHRINK_SCALE
+    return math.log1p(ref["sd"] / ref["mean"])
+
+
+def paper_value(drive, condition, figure):
+    ref = paper.RESULTS[(drive, condition)][figure]
+    return ref if figure == "shrink" else ref["mean"]
+
+
+def objective(summary):
+    """(value, {figure: term}, claims) of a summary (module docstring); eq-free, so
+    tests compute it by hand on made-up figures."""
+    terms = {}
+    for g in summary["groups"]:
+        for f in FIGURES:
+            ours = g[f] if f == "shrink" else g[f]["mean"]
+            key = f"{g['robot']}/{g['condition']}/{f}"
+            if not ours:
+                terms[key] = MISSING_TERM
+                continue
+            ratio = math.log(ours / paper_value(g["drive"], g["condition"], f))
+            terms[key] = (ratio / scale(g["drive"], g["condition"], f)) ** 2
+    claims = report.claims(summary)
+    failing = sum(not held for _, _, held in claims)
+    value = sum(terms.values()) / max(len(terms), 1) + CLAIM_PENALTY * failing
+    return value, terms, claims
+
+
+def setting_text(params):
+    """A trial's readings that differ from the defaults, as 'name=value' text."""
+    changed = [(k, v) for k, v in sorted(params.items()) if v != default(k)]
+    return ", ".join(f"{k}={_short(v)}" for k, v in changed) or "the defaults"
+
+
+def _short(v):
+    return f"{v:.3g}" if isinstance(v, float) else str(v)
+
+
+# -- validation ------------------------------------------------------------------
+def validate_best(problem, trial_params, out, seeds, workers=None, backend="local",
+                  progress=True):
+    """Runs a trial's settings and the defaults on seeds (full budgets, never used by
+    the search); writes and returns validation.json's content."""
+    from experiments import runner
+    where = lambda spec: study.run_folder(out, spec)  # noqa: E731
+    rows = {}
+    plans = {"best": problem.specs(trial_params, seeds), "defaults": problem.specs({}, seeds)}
+    all_specs = sorted({s for v in plans.values() for s in v}, key=lambda s: -s.steps)
+    ran = runner.run(all_specs, where, workers=workers, backend=backend, progress=progress)
+    if ran.failed:
+        return None, ran.failed
+    for name, specs in plans.items():
+        runs = {}
+        for s in specs:
+            runs.update(results.load_runs(where(s), [s]))
+        summary = results.summarize(runs)
+        value, terms, claims = objective(summary)
+        rows[name] = {"value": value, "groups": summary["groups"],
+                      "claims": [[c, o, bool(h)] for c, o, h in claims]}
+    data = {"seeds": list(seeds), "params": trial_params, "rows": rows}
+    results.atomic_write(pathlib.Path(out) / "validation.json", results.dumps(data))
+    return data, []
+
+
+# -- the report -------------------------------------------------------------------
+def importances(s, names):
+    """{target: {reading: importance}} for the objective and each figure (fANOVA,
+    seeded), over the complete trials; {} with fewer than 10 of them."""
+    import optuna
+    done = s.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,))
+    if len(done) < 10:
+        return {}
+    keys = list(done[0].user_attrs["rungs"][0]["figures"])
+    out = {}
+    evaluator = lambda: optuna.importance.FanovaImportanceEvaluator(seed=0)  # noqa: E731
+    out["objective"] = optuna.importance.get_param_importances(s, evaluator=evaluator(),
+                                                               params=list(names))
+    for key in keys:
+        def target(t, key=key):
+            v = t.user_attrs["rungs"][0]["figures"].get(key)
+            return math.log(v) if v else math.log(1e6)
+        out[key] = optuna.importance.get_param_importances(s, evaluator=evaluator(),
+                                                           params=list(names), target=target)
+    return out
+
+
+def objective_figure(s, path):
+    """The objective of every complete trial over trial numbers, and the best so far."""
+    import optuna
+    plt = report._plt()
+    done = s.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,))
+    xs = [t.number for t in done]
+    ys = [t.value for t in done]
+    fig, ax = plt.subplots(figsize=(7, 3.5))
+    ax.scatter(xs, ys, s=10, alpha=0.6, label="trial (first rung's seeds)")
+    best, line = math.inf, []
+    for y in ys:
+        best = min(best, y)
+        line.append(best)
+    ax.step(xs, line, where="post", color="C3", label="best so far")
+    ax.set_yscale("log")
+    ax.set_xlabel("trial")
+    ax.set_ylabel("objective (lower is closer to the paper)")
+    ax.legend(loc="upper right", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def _figure_rows(groups_by_name):
+    """Markdown rows: each figure of the paper beside each named summary's groups."""
+    names = list(groups_by_name)
+    lines = ["| robot | condition | figure | paper | " + " | ".join(names) + " |",
+             "|---|---|---|---:|" + "---:|" * len(names)]
+    first = groups_by_name[names[0]]
+    for g in first:
+        for f in FIGURES:
+            cells = []
+            for n in names:
+                h = next((x for x in groups_by_name[n]
+                          if (x["robot"], x["condition"]) == (g["robot"], g["condition"])), None)
+                if h is None:
+                    cells.append("-")
+                elif f == "shrink":
+                    cells.append(report._fmt(h["shrink"], 2))
+                else:
+                    cells.append(f"{report._fmt(h[f]['mean'])} {report._ci(h[f]['ci95'])}")
+            pv = paper_value(g["drive"], g["condition"], f)
+            lines.append(f"| {g['robot']} | {g['condition']} | {f.replace('_', ' ')} | "
+                         f"{report._fmt(pv, 2 if f == 'shrink' else 0)} | " + " | ".join(cells) + " |")
+    return lines
+
+
+def tables(s, out, names):
+    """The markdown of FIT.md's body (also RESULTS.md's Search block)."""
+    import optuna
+    trials = s.get_trials(deepcopy=False)
+    done = [t for t in trials if t.state == optuna.trial.TrialState.COMPLETE]
+    failed = [t for t in trials if t.state == optuna.trial.TrialState.FAIL]
+    lines = [f"{len(done)} complete trials ({len(failed)} failed or interrupted) in study "
+             f"`{s.study_name}`. Each ran on seeds "
+             + ", ".join(f"{r[0]}-{r[-1]}" for r in _rungs(done)) + " (the later rungs only "
+             "for promoted trials); the best are ranked on their largest rung.", "",
+             "| trial | objective | seeds | claims held | readings (changed from the defaults) |",
+             "|---:|---:|---:|---:|---|"]
+    for t in study.best_trials(s, 8):
+        d = study.deepest(t)
+        held = sum(c[2] for c in d["claims"])
+        lines.append(f"| {t.number} | {d['value']:.3g} | {len(d['seeds'])} | "
+                     f"{held}/{len(d['claims'])} | {setting_text(t.params)} |")
+    imp = importances(s, names)
+    if imp:
+        targets = list(imp)
+        lines += ["", "Importance of each reading (fANOVA over the complete trials; the "
+                  "objective, then the log of each first-rung figure):", "",
+                  "| reading | " + " | ".join(t.replace("/", " ").replace("_", " ") for t in targets) + " |",
+                  "|---|" + "---:|" * len(targets)]
+        for n in names:
+            lines.append(f"| {n} | " + " | ".join(f"{imp[t].get(n, 0):.2f}" for t in targets) + " |")
+    vpath = pathlib.Path(out) / "validation.json"
+    if vpath.exists():
+        v = json.loads(vpath.read_text())
+        rows = v["rows"]
+        seeds = v["seeds"]
+        lines += ["", f"Held-out validation on seeds {seeds[0]}-{seeds[-1]} ({len(seeds)} seeds "
+                  "the search never used), full budgets: the best trial's readings ("
+                  f"{setting_text(v['params'])}) beside the defaults. 95% intervals are "
+                  "percentile bootstraps over seeds.", ""]
+        lines += _figure_rows({"best": rows["best"]["groups"], "defaults": rows["defaults"]["groups"]})
+        lines += ["", "| claim | best | defaults |", "|---|---|---|"]
+        for (c, o, h), (_, o2, h2) in zip(rows["best"]["claims"], rows["defaults"]["claims"]):
+            lines.append(f"| {c} | {o} ({'holds' if h else 'fails'}) | {o2} ({'holds' if h2 else 'fails'}) |")
+        lines.append("")
+        lines.append(f"Objective: best {rows['best']['value']:.3g}, defaults "
+                     f"{rows['defaults']['value']:.3g}; claims held: best "
+                     f"{sum(c[2] for c in rows['best']['claims'])}/{len(rows['best']['claims'])}, "
+                     f"defaults {sum(c[2] for c in rows['defaults']['claims'])}/"
+                     f"{len(rows['defaults']['claims'])}.")
+    return "\n".join(lines)
+
+
+def _rungs(done):
+    seen = []
+    for t in done:
+        for r in t.user_attrs.get("rungs", []):
+            if r["seeds"] not in seen:
+                seen.append(r["seeds"])
+    return sorted(seen, key=len) or [[0]]
+
+
+def write(s, out, names):
+    """FIT.md and fit_objective.png under out; returns FIT.md's path."""
+    out = pathlib.Path(out)
+    best = study.best_trials(s, 1)
+    lines = ["# `ebrl fit`: the readings against Section 3.6", "",
+             "Objective: the mean over the twelve Section 3.6 figures of (log(ours / paper) / "
+             "scale)^2, scale = log(1 + sd / mean) of the paper's figure (the shrinks: "
+             f"{SHRINK_SCALE}), plus {CLAIM_PENALTY:g} per failing claim "
+             "(experiments/fit.py). Lower is closer to the paper.", "",
+             "The space: " + "; ".join(f"`{p.name}` ({p.what}; "
+                                       + ("/".join(map(str, p.values)) if p.kind == "choice"
+                                          else f"{p.values[0]}-{p.values[1]}")
+                                       + ("" if p.scope == "both" else ", floating only") + ")"
+                                       for p in SPACE if p.name in names) + ".", "",
+             tables(s, out, names), ""]
+    if best:
+        d = study.deepest(best[0])
+        lines += ["", f"Trial {best[0].number}'s figures on its {len(d['seeds'])} seeds:", "",
+                  "| figure | paper | ours |", "|---|---:|---:|"]
+        for key, v in d["figures"].items():
+            robot, cond, f = key.split("/")
+            from tasks.robots import resolve
+            pv = paper_value(resolve(robot).drive, cond, f)
+            lines.append(f"| {key} | {report._fmt(pv, 2 if f == 'shrink' else 0)} | "
+                         f"{report._fmt(v, 2 if f == 'shrink' else 0)} |")
+    if s.get_trials(deepcopy=False):
+        objective_figure(s, out / "fit_objective.png")
+        lines += ["", "![objective over trials](fit_objective.png)", ""]
+    path = out / "FIT.md"
+    results.atomic_write(path, "\n".join(lines))
+    return path
+
+
+FIT_BEGIN = "<!-- ebrl fit: generated, do not edit -->"
+FIT_END = "<!-- ebrl fit: end -->"
+
+
+def publish(s, out, names, results_md, figures_dir):
+    """RESULTS.md's Search block, and the objective figure beside its other figures."""
+    import shutil
+    figures_dir = pathlib.Path(figures_dir)
+    figures_dir.mkdir(parents=True, exist_ok=True)
+    src = pathlib.Path(out) / "fit_objective.png"
+    block = [FIT_BEGIN, "", tables(s, out, names), ""]
+    if src.exists():
+        shutil.copyfile(src, figures_dir / "fit_objective.png")
+        rel = pathlib.Path(figures_dir).resolve().relative_to(pathlib.Path(results_md).resolve().parent)
+        block += [f"![objective over trials]({rel / 'fit_objective.png'})", ""]
+    report.replace_block(results_md, FIT_BEGIN, FIT_END, block + [FIT_END])
+    return results_md
