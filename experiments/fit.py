@@ -183,7 +183,10 @@ def validate_best(problem, trial_params, out, seeds, workers=None, backend="loca
     where = lambda spec: study.run_folder(out, spec)  # noqa: E731
     rows = {}
     plans = {"best": problem.specs(trial_params, seeds), "defaults": problem.specs({}, seeds)}
-    all_specs = sorted({s for v in plans.values() for s in v}, key=lambda s: -s.steps)
+    # Seed by seed (the longest runs of a seed first), so that an interrupted validation
+    # holds whole seeds of both settings.
+    all_specs = sorted({s for v in plans.values() for s in v},
+                       key=lambda s: (s.seed, -s.steps, s.robot, s.condition, s.overrides))
     ran = runner.run(all_specs, where, workers=workers, backend=backend, progress=progress)
     if ran.failed:
         return None, ran.failed
