@@ -147,11 +147,11 @@ class Floating(navigation.Navigation):
         physics._kints[kernels.I_THRUST] = THRUSTS.index(self.config.thrust)
         physics._kfloats[kernels.F_VELOCITY] = physics.step_seconds / UNIT
         physics._kfloats[kernels.F_THRUST] = physics.thrust_scale()
-        # The compiled step: the contact's physics alone at a wall ("grip", "slide"),
-        # the velocity read as it is.
-        config = self.config
-        self._compiled = (physics.bump is None and config.velocity_noise == 0
-                          and config.velocity_code == "none")
+        physics._kints[kernels.I_VELOCITY_CODE] = self.config.velocity_code == "code"
+        physics._kfloats[kernels.F_VELOCITY_FULL] = VELOCITY_FULL_SCALE
+        # The compiled step serves the bump readings that leave a wall to the contact's
+        # physics ("grip", "slide"); "stop" and "bounce" run the hooks.
+        self._compiled = physics.bump is None
         super().initialize_episode(physics)
 
     def compiled_step(self, action, physics):
@@ -159,8 +159,10 @@ class Floating(navigation.Navigation):
             return None
         a = self.compiled_action(action)
         u, z = self.draws(physics)
+        sd = self.config.velocity_noise
+        vz = self.random.normal(0.0, sd, size=2) if sd > 0 else navigation._NO_NOISE
         status, n, goal, codes, velocity = kernels.floating_step(
-            a, u, z, *physics.kernel_args, physics._body_velocity)
+            a, u, z, vz, *physics.kernel_args, physics._body_velocity)
         observation = collections.OrderedDict()
         observation["range"], observation["velocity"] = codes, velocity
         return self.finish_compiled(status, n, goal, physics, observation)

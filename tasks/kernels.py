@@ -215,8 +215,9 @@ def noise_factor(noise, u):
  I_N_FIRST,        # substeps of the first phase: the turn (two-wheel), the thrust (floating)
  I_N_REST,         # substeps of the rest: the move (two-wheel), the coast (floating)
  I_THRUST,         # floating: the thrust reading, an index of tasks.config.THRUSTS
- ) = range(10)
-N_INTS = 10
+ I_VELOCITY_CODE,  # floating: 1 for the velocity read through the 0-255 code, else 0
+ ) = range(11)
+N_INTS = 11
 THRUST_SCALED, THRUST_DEMAND, THRUST_CLIPPED = range(3)  # tasks.config.THRUSTS, in order
 (F_UNIT, F_TIMESTEP, F_METRES_TO_UNITS, F_RADIUS, F_MIN_COS_TILT,
  F_X0, F_X1, F_Y0, F_Y1,  # the goal square, units
@@ -226,8 +227,9 @@ THRUST_SCALED, THRUST_DEMAND, THRUST_CLIPPED = range(3)  # tasks.config.THRUSTS,
  F_TOLERANCE,             # two-wheel: a move short by more than this was blocked
  F_VELOCITY,              # floating: m/s -> units per agent step
  F_THRUST,                # floating: the force per unit/step of velocity change
- ) = range(17)
-N_FLOATS = 17
+ F_VELOCITY_FULL,         # floating: the velocity code's full scale, units/step
+ ) = range(18)
+N_FLOATS = 18
 
 
 @njit(cache=True)
@@ -369,10 +371,29 @@ def floating_thrust(a, u, m, d, ctrl, xmat, bad_qacc, ints, floats):
 
 
 @njit(cache=True)
-def floating_step(action, u, noise, m, d, flags, ctrl, qpos, xpos, xmat, sensordata,
-                  bad_qacc, ints, floats, velocity6):
+def velocity_reading(v, noise, ints, floats):
+    """floating.Floating.sense_velocity on the velocity v (changed in place): plus the
+    noise (an empty array: none), then, with the velocity code, the 0-255 code over
+    +-full scale and back (np.clip as numpy's maximum then minimum)."""
+    if noise.shape[0]:
+        for i in range(v.shape[0]):
+            v[i] = v[i] + noise[i]
+    if ints[I_VELOCITY_CODE]:
+        half, full = floats[F_LEVELS] / 2, floats[F_VELOCITY_FULL]
+        for i in range(v.shape[0]):
+            x = v[i] / full
+            x = x if x > -1.0 else -1.0
+            x = x if x < 1.0 else 1.0
+            code = np.rint(x * half + half)
+            v[i] = (code - half) / half * full
+    return v
+
+
+@njit(cache=True)
+def floating_step(action, u, noise, velocity_noise, m, d, flags, ctrl, qpos, xpos, xmat,
+                  sensordata, bad_qacc, ints, floats, velocity6):
     """One agent step of the floating drive, the hooks' work in their order: the thrust,
-    the coast, the goal test, the encoded readings and the velocity read-out. Returns
+    the coast, the goal test, the encoded readings and the velocity reading. Returns
     (status, substeps run, in the goal, readings, velocity)."""
     nothing = np.empty(0)
     if not clip_unit(action):
@@ -387,4 +408,5 @@ def floating_step(action, u, noise, m, d, flags, ctrl, qpos, xpos, xmat, sensord
         return status, n, False, nothing, nothing
     goal = goal_reached(qpos, xpos, xmat, ints, floats)
     codes = readings(m, d, flags, sensordata, ints, floats, noise)
-    return OK, n, goal, codes, velocity(m, d, ints[I_BASE], floats[F_VELOCITY], velocity6)
+    v = velocity(m, d, ints[I_BASE], floats[F_VELOCITY], velocity6)
+    return OK, n, goal, codes, velocity_reading(v, velocity_noise, ints, floats)

@@ -19,6 +19,9 @@ def _pair(robot, **fields):
     ("floating", {}),
     ("floating", {"thrust": "clipped", "bump": "slide"}),
     ("floating", {"thrust": "demand", "action_noise": 0.0}),
+    ("floating", {"velocity_noise": 0.1, "velocity_code": "code"}),
+    ("floating", {"velocity_code": "code", "sensor_noise": 0.0}),
+    ("floating", {"velocity_noise": 0.05, "wall_friction": 0.3}),
 ])
 def test_the_compiled_step_is_the_hooks_step_for_step(robot, fields):
     compiled, hooks = _pair(robot, **fields)
