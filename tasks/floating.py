@@ -6,12 +6,15 @@ own velocity until it bumps into something. It starts at rest. The robot file's
 actuators ``thrust_x`` and ``thrust_y`` push along the world's x and y axes
 (motors on slide joints, or on a site with a world-fixed reference site).
 """
+import collections
+
 import mujoco
 import numpy as np
 
 import models
 from models import UNIT
-from tasks import navigation
+from tasks import kernels, navigation
+from tasks.config import THRUSTS
 
 MAX_ACCELERATION = 0.2  # units per step, per step
 #: The velocity code's full scale (TaskConfig.velocity_code "code"), in units/step: the
@@ -55,6 +58,7 @@ class Physics(navigation.Physics):
                 "the floating drive needs 8 rangefinders (E, NE, N, NW, W, SW, S, SE; eq 10)")
         self._mass = float(m.body_subtreemass[self._base])
         self._hull = navigation._id(m, mujoco.mjtObj.mjOBJ_GEOM, "hull")
+        self._kints[kernels.I_ACT0], self._kints[kernels.I_ACT1] = self._thrust_x, self._thrust_y
         #: The bump reading applied after each substep: None ("grip", "slide": the
         #: contact's physics alone), "stop" or "bounce"; set by the task, with the
         #: share of the speed into the wall that "bounce" reflects.
@@ -119,9 +123,13 @@ class Physics(navigation.Physics):
         robot's beams point along the world's axes (E, NE, N, ...)."""
         super().set_robot_pose(x, y, 0.0)
 
+    def thrust_scale(self):
+        """The force per unit/step of velocity change in one substep."""
+        return UNIT / self.step_seconds * self._mass / self.timestep
+
     def thrust(self, dvx, dvy):
         """Sets the thrust that changes the velocity by (dvx, dvy) units/step in one substep."""
-        scale = UNIT / self.step_seconds * self._mass / self.timestep
+        scale = self.thrust_scale()
         ctrl = self._ctrl
         ctrl[self._thrust_x] = dvx * scale
         ctrl[self._thrust_y] = dvy * scale
@@ -134,7 +142,30 @@ class Floating(navigation.Navigation):
         physics.step_seconds = substeps(physics.timestep, self.time_scale) * physics.timestep
         physics.bump = self.config.bump if self.config.bump in ("stop", "bounce") else None
         physics.restitution = self.config.restitution
+        n = substeps(physics.timestep, self.time_scale)
+        self.kernel_settings(physics, 1, n - 1, (MAX_ACCELERATION, 0.0))
+        physics._kints[kernels.I_THRUST] = THRUSTS.index(self.config.thrust)
+        physics._kfloats[kernels.F_VELOCITY] = physics.step_seconds / UNIT
+        physics._kfloats[kernels.F_THRUST] = physics.thrust_scale()
+        physics._kints[kernels.I_VELOCITY_CODE] = self.config.velocity_code == "code"
+        physics._kfloats[kernels.F_VELOCITY_FULL] = VELOCITY_FULL_SCALE
+        # The compiled step serves the bump readings that leave a wall to the contact's
+        # physics ("grip", "slide"); "stop" and "bounce" run the hooks.
+        self._compiled = physics.bump is None
         super().initialize_episode(physics)
+
+    def compiled_step(self, action, physics):
+        if not self._compiled:
+            return None
+        a = self.compiled_action(action)
+        u, z = self.draws(physics)
+        sd = self.config.velocity_noise
+        vz = self.random.normal(0.0, sd, size=2) if sd > 0 else navigation._NO_NOISE
+        status, n, goal, codes, velocity = kernels.floating_step(
+            a, u, z, vz, *physics.kernel_args, physics._body_velocity)
+        observation = collections.OrderedDict()
+        observation["range"], observation["velocity"] = codes, velocity
+        return self.finish_compiled(status, n, goal, physics, observation)
 
     def get_observation(self, physics):
         obs = super().get_observation(physics)

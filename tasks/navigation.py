@@ -13,7 +13,6 @@ import collections
 import math
 
 import mujoco
-import numba
 import numpy as np
 from dm_control import mujoco as dm_mujoco
 from dm_control.rl import control
@@ -21,6 +20,7 @@ from dm_control.suite import base
 from dm_env import specs
 
 from models import PREFIX, UNIT, room_layout
+from tasks import kernels
 from tasks.config import TaskConfig
 
 # Section 3.1: the start pose is the room's "start" site (5 units from the left edge,
@@ -38,40 +38,11 @@ class ContractError(ValueError):
     """A robot file that lacks a part the naming contract asks for."""
 
 
-# The per-step sensor arithmetic runs as two small compiled loops: on 7-8 readings,
-# numpy's per-call overhead (about 0.3 us a call, a dozen calls) cost more than the
-# sensing itself. Same operations in the same order, so the same bits (tested).
-
-
-@numba.njit(cache=True)
-def _surface_distances(raw, metres_to_units, radius):
-    """Rangefinder readings (m from the centre; -1 = no hit) -> units from the surface."""
-    out = np.empty(raw.shape[0])
-    for i in range(raw.shape[0]):
-        out[i] = np.inf if raw[i] < 0.0 else raw[i] * metres_to_units - radius
-    return out
-
-
-@numba.njit(cache=True)
-def _encode(distance, noise, levels, per_unit):
-    """Section 3.2's code of each distance, plus noise (if any) clipped to [0, levels].
-    max/min as numpy's maximum/minimum (the second argument unless the first is larger:
-    max(-0.0, 0.0) is 0.0)."""
-    out = np.empty(distance.shape[0])
-    for i in range(distance.shape[0]):
-        d = distance[i]
-        c = d if d > 0.0 else 0.0
-        c = c * per_unit
-        c = c + levels
-        c = np.rint(c)
-        c = c if c > 0.0 else 0.0
-        if noise.shape[0]:
-            c = c + noise[i]
-            c = c if c > 0.0 else 0.0
-            c = c if c < levels else levels
-        out[i] = c
-    return out
-
+# The per-step sensor arithmetic runs as small compiled loops (tasks.kernels): on 7-8
+# readings, numpy's per-call overhead cost more than the sensing itself. Same
+# operations in the same order, so the same bits (tested).
+_surface_distances = kernels.surface_distances
+_encode = kernels.encode
 
 _NO_NOISE = np.zeros(0)
 
@@ -142,9 +113,16 @@ class Physics(dm_mujoco.Physics):
         self._act = data.ptr.act
         self._xpos, self._xmat = data.ptr.xpos[self._base], data.ptr.xmat[self._base]
         self._body_velocity = np.zeros(6)
-        self._bad_qacc = data.ptr.warning[mujoco.mjtWarning.mjWARN_BADQACC]
         self._sensor_bit = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
         mjm.opt.disableflags |= self._sensor_bit
+        # What the compiled kernels (tasks.kernels) work on: the structs' addresses, views
+        # of the two ints they touch, and the settings arrays (the task fills its part).
+        self._m, self._d = mjm._address, data.ptr._address
+        self._flags = kernels.disable_flags(mjm)
+        self._bad_qacc = kernels.warning_count(data.ptr, mujoco.mjtWarning.mjWARN_BADQACC)
+        self._beam_span = np.array([self._beams.start, self._beams.stop], dtype=np.int64)
+        self._kints = np.zeros(kernels.N_INTS, dtype=np.int64)
+        self._kfloats = np.zeros(kernels.N_FLOATS)
         #: The room's timestep in seconds.
         self.timestep = float(mjm.opt.timestep)
         #: Substeps run so far, for benchmarks against raw mujoco.mj_step.
@@ -153,6 +131,21 @@ class Physics(dm_mujoco.Physics):
         self.goal_box = (np.array(goal[::2]), np.array(goal[1::2]))
         #: Seconds of simulated time per agent step; set by the task.
         self.step_seconds = 1.0
+        k, f = self._kints, self._kfloats
+        k[kernels.I_QYAW] = -1 if self._qyaw is None else self._qyaw
+        k[kernels.I_FREE] = self._free is not None
+        k[kernels.I_BASE] = self._base
+        k[kernels.I_BEAM0], k[kernels.I_BEAM1] = self._beam_span
+        f[kernels.F_UNIT], f[kernels.F_TIMESTEP] = UNIT, self.timestep
+        f[kernels.F_METRES_TO_UNITS], f[kernels.F_RADIUS] = 1.0 / UNIT, self.robot_radius
+        f[kernels.F_MIN_COS_TILT] = self._min_cos_tilt
+        f[kernels.F_X0], f[kernels.F_Y0] = self.goal_box[0]
+        f[kernels.F_X1], f[kernels.F_Y1] = self.goal_box[1]
+        #: The kernels' MuJoCo arguments, in their order (tasks.kernels).
+        self.kernel_args = (self._m, self._d, self._flags, self._ctrl, self._qpos, self._xpos,
+                            self._xmat, self._sensordata, self._bad_qacc, k, f)
+        #: Rangefinders (the sensor noise draws one normal for each).
+        self.n_beams = len(adr)
 
     def _find_base_joints(self, m):
         """The base's joints: one free joint, or slide x and slide y (and hinge yaw)."""
@@ -210,11 +203,8 @@ class Physics(dm_mujoco.Physics):
     def ranges(self):
         """Distance from the body surface along each beam, in units; inf where nothing is
         hit. Runs the sensor stage once, at the current state."""
-        model, data = self._mj
-        model.opt.disableflags &= ~self._sensor_bit
-        mujoco.mj_sensorPos(model, data)
-        model.opt.disableflags |= self._sensor_bit
-        return _surface_distances(self._sensordata[self._beams], 1.0 / UNIT, self.robot_radius)
+        return kernels.ranges(self._m, self._d, self._flags, self._sensordata, self._beam_span,
+                              1.0 / UNIT, self.robot_radius)
 
     def in_goal(self):
         """True when the robot's centre is inside the goal square."""
@@ -226,18 +216,19 @@ class Physics(dm_mujoco.Physics):
         """dm_control's legacy step (mj_step2, mj_step(n-1), mj_step1), so contacts and
         kinematics describe the new state, without its per-call Python overhead.
         Raises PhysicsError when MuJoCo flags an unstable state or a 3D robot tips over."""
-        model, data = self._mj
-        before = self._bad_qacc.number
-        mujoco.mj_step2(model, data)
-        if nstep > 1:
-            mujoco.mj_step(model, data, nstep - 1)
-        mujoco.mj_step1(model, data)
+        status = kernels.run(self._m, self._d, nstep, self._bad_qacc, self._xmat,
+                             self._free is not None, self._min_cos_tilt)
         self.substeps += nstep
-        if self._bad_qacc.number != before:
-            raise control.PhysicsError(f"unstable simulation at t={data.time:.3f} s")
-        if self._free is not None and self._xmat[8] < self._min_cos_tilt:
-            raise control.PhysicsError(f"the robot tipped over at t={data.time:.3f} s "
-                                       f"(tilt {math.degrees(self.tilt()):.0f} degrees)")
+        if status != kernels.OK:
+            self.raise_for(status)
+
+    def raise_for(self, status):
+        """The PhysicsError of a kernel's status (tasks.kernels: UNSTABLE, TIPPED)."""
+        t = self._mj[1].time
+        if status == kernels.UNSTABLE:
+            raise control.PhysicsError(f"unstable simulation at t={t:.3f} s")
+        raise control.PhysicsError(f"the robot tipped over at t={t:.3f} s "
+                                   f"(tilt {math.degrees(self.tilt()):.0f} degrees)")
 
     _min_cos_tilt = math.cos(math.radians(MAX_TILT_DEGREES))
 
@@ -279,6 +270,51 @@ class Navigation(base.Task):
         self._jitter_heading = np.deg2rad(config.start_jitter_heading)
 
     # -- episode -------------------------------------------------------------
+    def kernel_settings(self, physics, n_first, n_rest, gains=(0.0, 0.0)):
+        """The task's part of the kernels' settings (tasks.kernels): the substeps of the
+        step's two phases, Section 3.2's code and noise, the drive's constants."""
+        k, f = physics._kints, physics._kfloats
+        k[kernels.I_N_FIRST], k[kernels.I_N_REST] = n_first, n_rest
+        f[kernels.F_LEVELS] = SENSOR_LEVELS
+        f[kernels.F_PER_UNIT] = -SENSOR_LEVELS / self.config.sensor_range
+        f[kernels.F_ACTION_NOISE] = self.action_noise
+        f[kernels.F_GAIN0], f[kernels.F_GAIN1] = gains
+
+    def draws(self, physics):
+        """One step's random draws, in the order the hooks make them: the action noise's
+        two uniforms (noise_factors), then the sensor noise's normals (sense)."""
+        u = self.random.random_sample(2) if self.action_noise > 0 else _NO_NOISE
+        if self.sensor_noise > 0:
+            return u, self.random.normal(0.0, self.sensor_noise, size=physics.n_beams)
+        return u, _NO_NOISE
+
+    def compiled_action(self, action):
+        """The action as a fresh float64 array, clipped to [-1, 1] as checked_action
+        clips it; checked_action's errors for a wrong shape, NaN or inf."""
+        a = np.array(action, dtype=np.float64)
+        if a.shape != (self.action_dim,):
+            if not (a.ndim == 0 and self.action_dim == 1):
+                self.checked_action(action)
+            a = a.reshape(1)
+        if not kernels.clip_unit(a):
+            self.checked_action(action)
+        return a
+
+    def compiled_step(self, action, physics):
+        """The work of env.step's hooks (before_step, the substeps, after_step,
+        get_reward, get_observation, get_termination) in one compiled call: returns
+        (reward, observation, termination), or None where the drive has no such kernel
+        for this physics and config (then the hooks run)."""
+        return None
+
+    def finish_compiled(self, status, n, goal, physics, observation):
+        """The common end of a compiled step: counts, errors, the goal's reward."""
+        physics.substeps += n
+        if status != kernels.OK:
+            physics.raise_for(status)
+        self._at_goal = goal
+        return (1.0 if goal else 0.0), observation, (0.0 if goal else None)
+
     def initialize_episode(self, physics):
         x, y, heading = physics.start
         if self.config.start_jitter:

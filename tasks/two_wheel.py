@@ -11,12 +11,13 @@ Two ways to realise it, picked by the robot file's actuators (docs/adding_a_robo
 - `WheelPhysics`: two wheel hinges ``left_wheel`` and ``right_wheel`` rolling on the
   floor, under position servos whose targets follow the turn or the move (`diff_drive`).
 """
+import collections
 import math
 
 import numpy as np
 
 from models import UNIT
-from tasks import navigation
+from tasks import kernels, navigation
 
 MAX_TURN = 1.0  # rad per step
 MAX_MOVE = 2.0  # units per step
@@ -44,6 +45,7 @@ class Physics(navigation.Physics):
         if ids["forward"] < 0 or ids["turn"] < 0:
             raise navigation.ContractError(MISSING_ACTUATORS)
         self._forward, self._turn = ids["forward"], ids["turn"]
+        self._kints[kernels.I_ACT0], self._kints[kernels.I_ACT1] = self._forward, self._turn
         # Deadbeat servos: kv = driven inertia / timestep reaches the target speed in one
         # semi-implicit Euler step. The base's mass drives forward and grip, its yaw
         # inertia the turn.
@@ -86,7 +88,23 @@ class TwoWheel(navigation.Navigation):
         self._n_turn = navigation.substeps(TURN_SECONDS * self.time_scale, dt)
         self._n_move = navigation.substeps(MOVE_SECONDS * self.time_scale, dt)
         physics.step_seconds = (self._n_turn + self._n_move) * dt
+        self.kernel_settings(physics, self._n_turn, self._n_move, (MAX_TURN, MAX_MOVE))
+        physics._kfloats[kernels.F_TOLERANCE] = BLOCKED_TOLERANCE
+        # The compiled step serves the planar base; the wheels run the hooks.
+        self._compiled = isinstance(physics, Physics)
+        self._plan = np.zeros(6)
         super().initialize_episode(physics)
+
+    def compiled_step(self, action, physics):
+        if not self._compiled:
+            return None
+        a = self.compiled_action(action)
+        u, z = self.draws(physics)
+        status, n, goal, codes = kernels.two_wheel_step(a, u, z, *physics.kernel_args,
+                                                        self._plan)
+        observation = collections.OrderedDict()
+        observation["range"] = codes
+        return self.finish_compiled(status, n, goal, physics, observation)
 
     def before_step(self, action, physics):
         (a,) = self.checked_action(action)

@@ -1,0 +1,412 @@
+"""The tasks' per-step work as compiled kernels, around MuJoCo's own C calls.
+
+The mirror of ebrl/kernels.py for the simulator side. An agent step of the paper's
+robots (a drive's action mapping, its phases of substeps, the read-outs, the
+rangefinders' encoding and noise) is one compiled call (`two_wheel_step`,
+`floating_step`) that calls MuJoCo's C functions (mj_step, mj_step1, mj_step2,
+mj_sensorPos, mj_objectVelocity) directly on the MjModel and MjData, with no Python
+in between. The task's hooks (before_step, Physics.step, after_step, sense) call the
+same kernels one piece at a time, and dm_control's Environment.step runs them; the two
+paths give the same bits (tests/test_tasks.py).
+
+Every kernel is ``@njit(cache=True)`` with no fastmath: each floating-point operation
+runs as the Python it replaced wrote it, in the same order (same bits, tested against
+tests/data/planar_traces_v*.npz). MuJoCo's functions are declared by symbol name
+(numba ExternalFunction), resolved in libmujoco.so, which the mujoco package has
+loaded; the compiled kernels stay cacheable because they hold no addresses.
+
+What a kernel reads and writes of MuJoCo's structs:
+    m, d          the mjModel and mjData addresses (MjModel._address, MjData._address)
+    flags         an int32 view of m->opt.disableflags (the sensor stage is switched on
+                  only for mj_sensorPos, as navigation.Physics.ranges does)
+    bad_qacc      an int32 view of d->warning[mjWARN_BADQACC].number
+    qpos, ctrl, sensordata   MjData's own arrays (numpy views)
+    xpos, xmat    the base body's rows of d->xpos and d->xmat
+
+The random draws stay NumPy's (the task's RandomState): the caller draws the action
+noise's two uniforms and the sensor noise's normals, in the order the hooks draw them,
+and passes them in.
+"""
+import ctypes
+import glob
+import math
+import os
+
+import mujoco
+import numpy as np
+from llvmlite import binding
+from numba import njit, types
+
+_LIBRARY = sorted(glob.glob(os.path.join(os.path.dirname(mujoco.__file__), "libmujoco.so*")))
+if not _LIBRARY:  # pragma: no cover - every mujoco wheel for Linux ships it
+    raise ImportError("libmujoco.so not found beside the mujoco package")
+binding.load_library_permanently(_LIBRARY[0])
+
+_P = types.uintp  # a pointer, as an integer (the C ABI passes both in one register)
+mj_step = types.ExternalFunction("mj_step", types.void(_P, _P))
+mj_step1 = types.ExternalFunction("mj_step1", types.void(_P, _P))
+mj_step2 = types.ExternalFunction("mj_step2", types.void(_P, _P))
+mj_sensorPos = types.ExternalFunction("mj_sensorPos", types.void(_P, _P))
+mj_objectVelocity = types.ExternalFunction(
+    "mj_objectVelocity", types.void(_P, _P, types.intc, types.intc, _P, types.intc))
+
+#: A kernel's status: the step ran; MuJoCo flagged an unstable state (mjWARN_BADQACC);
+#: a free-joint robot tilted past navigation.MAX_TILT_DEGREES; the action is not finite.
+OK, UNSTABLE, TIPPED, NOT_FINITE = 0, 1, 2, 3
+
+_OBJ_BODY = int(mujoco.mjtObj.mjOBJ_BODY)
+_SENSOR_BIT = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
+
+
+# -- finding the two ints of MuJoCo's structs that have no array view -----------------
+
+def _int_field(anchor, get, set_, span=4096):
+    """An int32 numpy view of the struct field that get() reads and set_(value) writes,
+    found in the `span` bytes from `anchor` (the address of an array of the same struct
+    that comes before it): two marker values are written in turn and the bytes searched
+    for both at the same place, then the old value is put back."""
+    old = get()
+    hits = []
+    try:
+        for marker in (0x5EED1A2B, 0x2B1AED5E):
+            set_(marker)
+            raw = np.frombuffer(ctypes.string_at(anchor, span), dtype=np.int32)
+            hits.append(set(np.flatnonzero(raw == marker).tolist()))
+    finally:
+        set_(old)
+    both = hits[0] & hits[1]
+    if len(both) != 1:  # pragma: no cover - a MuJoCo whose struct layout defeats the search
+        raise RuntimeError("tasks.kernels: a field of MuJoCo's struct was not found")
+    return np.ctypeslib.as_array((ctypes.c_int32 * 1).from_address(anchor + 4 * both.pop()))
+
+
+def disable_flags(model):
+    """An int32 view of model->opt.disableflags (model: mujoco.MjModel); it follows
+    opt.gravity in mjOption."""
+    opt = model.opt
+    return _int_field(opt.gravity.ctypes.data, lambda: opt.disableflags,
+                      lambda v: setattr(opt, "disableflags", v))
+
+
+def warning_count(data, warning):
+    """An int32 view of data->warning[warning].number (data: mujoco.MjData); mjData's
+    warnings follow its solver_niter."""
+    stat = data.warning[warning]
+    return _int_field(data.solver_niter.ctypes.data, lambda: stat.number,
+                      lambda v: setattr(stat, "number", v))
+
+
+# -- physics ------------------------------------------------------------------------
+
+@njit(cache=True)
+def run(m, d, n, bad_qacc, xmat, free, min_cos_tilt):
+    """n substeps as dm_control's legacy step runs them (mj_step2, mj_step n-1 times,
+    mj_step1: contacts and kinematics then describe the new state). Returns OK, UNSTABLE
+    when MuJoCo flagged a bad acceleration meanwhile, or TIPPED when a free-joint robot
+    (free) ends tilted past min_cos_tilt (the cosine of the largest tilt)."""
+    before = bad_qacc[0]
+    mj_step2(m, d)
+    for _ in range(n - 1):
+        mj_step(m, d)
+    mj_step1(m, d)
+    if bad_qacc[0] != before:
+        return UNSTABLE
+    if free and xmat[8] < min_cos_tilt:
+        return TIPPED
+    return OK
+
+
+@njit(cache=True)
+def pose(xpos, xmat, qpos, qyaw, unit):
+    """(x, y, heading) in units and radians (navigation.Physics.robot_pose): the
+    heading is the yaw hinge's angle (qyaw >= 0), else the frame's x axis in the plane."""
+    x = xpos[0] / unit
+    y = xpos[1] / unit
+    heading = qpos[qyaw] if qyaw >= 0 else math.atan2(xmat[3], xmat[0])
+    return x, y, heading
+
+
+# -- sensing (Section 3.2) ----------------------------------------------------------
+
+@njit(cache=True)
+def surface_distances(raw, metres_to_units, radius):
+    """Rangefinder readings (m from the centre; -1 = no hit) -> units from the surface."""
+    out = np.empty(raw.shape[0])
+    for i in range(raw.shape[0]):
+        out[i] = np.inf if raw[i] < 0.0 else raw[i] * metres_to_units - radius
+    return out
+
+
+@njit(cache=True)
+def encode(distance, noise, levels, per_unit):
+    """Section 3.2's code of each distance, plus noise (if any) clipped to [0, levels].
+    max/min as numpy's maximum/minimum (the second argument unless the first is larger:
+    max(-0.0, 0.0) is 0.0)."""
+    out = np.empty(distance.shape[0])
+    for i in range(distance.shape[0]):
+        d = distance[i]
+        c = d if d > 0.0 else 0.0
+        c = c * per_unit
+        c = c + levels
+        c = np.rint(c)
+        c = c if c > 0.0 else 0.0
+        if noise.shape[0]:
+            c = c + noise[i]
+            c = c if c > 0.0 else 0.0
+            c = c if c < levels else levels
+        out[i] = c
+    return out
+
+
+@njit(cache=True)
+def ranges(m, d, flags, sensordata, beams, metres_to_units, radius):
+    """The sensor stage run once at the current state (MuJoCo's is disabled while
+    stepping), then each beam's distance from the body surface in units (inf: no hit).
+    beams = (first, end) of the rangefinders' sensordata."""
+    flags[0] &= ~_SENSOR_BIT
+    mj_sensorPos(m, d)
+    flags[0] |= _SENSOR_BIT
+    return surface_distances(sensordata[beams[0]:beams[1]], metres_to_units, radius)
+
+
+@njit(cache=True)
+def velocity(m, d, base, scale, out6):
+    """(vx, vy) of the base body's frame times scale (units per agent step over m/s)."""
+    mj_objectVelocity(m, d, _OBJ_BODY, base, out6.ctypes.data, 0)
+    out = np.empty(2)
+    out[0] = out6[3] * scale
+    out[1] = out6[4] * scale
+    return out
+
+
+# -- actions (Section 3.3) ----------------------------------------------------------
+
+@njit(cache=True)
+def clip_unit(a):
+    """Each part clipped to [-1, 1] as Python's min(max(v, -1), 1); NaN and inf are
+    refused (returns False)."""
+    for i in range(a.shape[0]):
+        if not math.isfinite(a[i]):
+            return False
+    for i in range(a.shape[0]):
+        v = a[i]
+        v = -1.0 if -1.0 > v else v
+        a[i] = 1.0 if 1.0 < v else v
+    return True
+
+
+@njit(cache=True)
+def noise_factor(noise, u):
+    """Section 3.3's factor from a uniform draw u in [0, 1): low + (1 - low) u with
+    low = 1 - noise, i.e. uniform in [1 - noise, 1] (RandomState.uniform's formula)."""
+    low = 1.0 - noise
+    return low + (1.0 - low) * u
+
+
+# -- the drives -------------------------------------------------------------------
+# A drive's settings reach the kernels as two arrays, `ints` and `floats`, indexed by
+# the names below: the physics fills its part when it loads (navigation.Physics), the
+# task its part when an episode starts (the substeps, the noise, the drive's constants).
+(I_ACT0, I_ACT1,   # the drive's two actuators: forward, turn (two-wheel); thrust x, y
+ I_QYAW,           # qpos address of the base's yaw hinge, -1 for none
+ I_FREE,           # 1 for a free-joint base (its tilt is checked), else 0
+ I_BASE,           # the base body's id
+ I_BEAM0, I_BEAM1,  # the rangefinders' sensordata: first, end
+ I_N_FIRST,        # substeps of the first phase: the turn (two-wheel), the thrust (floating)
+ I_N_REST,         # substeps of the rest: the move (two-wheel), the coast (floating)
+ I_THRUST,         # floating: the thrust reading, an index of tasks.config.THRUSTS
+ I_VELOCITY_CODE,  # floating: 1 for the velocity read through the 0-255 code, else 0
+ ) = range(11)
+N_INTS = 11
+THRUST_SCALED, THRUST_DEMAND, THRUST_CLIPPED = range(3)  # tasks.config.THRUSTS, in order
+(F_UNIT, F_TIMESTEP, F_METRES_TO_UNITS, F_RADIUS, F_MIN_COS_TILT,
+ F_X0, F_X1, F_Y0, F_Y1,  # the goal square, units
+ F_LEVELS, F_PER_UNIT,    # Section 3.2's code: 255 and -255 / sensor range
+ F_ACTION_NOISE,          # Section 3.3's noise
+ F_GAIN0, F_GAIN1,        # MAX_TURN, MAX_MOVE (two-wheel); MAX_ACCELERATION, - (floating)
+ F_TOLERANCE,             # two-wheel: a move short by more than this was blocked
+ F_VELOCITY,              # floating: m/s -> units per agent step
+ F_THRUST,                # floating: the force per unit/step of velocity change
+ F_VELOCITY_FULL,         # floating: the velocity code's full scale, units/step
+ ) = range(18)
+N_FLOATS = 18
+
+
+@njit(cache=True)
+def step_phase(m, d, n, bad_qacc, xmat, ints, floats):
+    """`run` with the physics' tilt check."""
+    return run(m, d, n, bad_qacc, xmat, ints[I_FREE] != 0, floats[F_MIN_COS_TILT])
+
+
+@njit(cache=True)
+def base_pose(qpos, xpos, xmat, ints, floats):
+    return pose(xpos, xmat, qpos, ints[I_QYAW], floats[F_UNIT])
+
+
+@njit(cache=True)
+def goal_reached(qpos, xpos, xmat, ints, floats):
+    """navigation.Physics.in_goal."""
+    x, y, _ = base_pose(qpos, xpos, xmat, ints, floats)
+    return floats[F_X0] <= x <= floats[F_X1] and floats[F_Y0] <= y <= floats[F_Y1]
+
+
+@njit(cache=True)
+def readings(m, d, flags, sensordata, ints, floats, noise):
+    """navigation.Navigation.sense: the encoded readings plus noise (empty: none)."""
+    return encode(ranges(m, d, flags, sensordata, ints[I_BEAM0:I_BEAM1 + 1],
+                         floats[F_METRES_TO_UNITS], floats[F_RADIUS]),
+                  noise, floats[F_LEVELS], floats[F_PER_UNIT])
+
+
+@njit(cache=True)
+def factors(u, floats):
+    """navigation.Navigation.noise_factors from its two uniform draws u (none are drawn,
+    and both factors are 1, without noise)."""
+    noise = floats[F_ACTION_NOISE]
+    if noise <= 0:
+        return 1.0, 1.0
+    return noise_factor(noise, u[0]), noise_factor(noise, u[1])
+
+
+# -- the two-wheel drive on a planar base (tasks.two_wheel.Physics) --------------------
+
+@njit(cache=True)
+def drive(ctrl, ints, floats, speed, yaw_rate):
+    """two_wheel.Physics.drive: speed in units/s along the heading, yaw rate in rad/s."""
+    ctrl[ints[I_ACT0]] = speed * floats[F_UNIT]
+    ctrl[ints[I_ACT1]] = yaw_rate
+
+
+@njit(cache=True)
+def two_wheel_turn(a, u, m, d, ctrl, qpos, xpos, xmat, bad_qacc, ints, floats, plan):
+    """two_wheel.TwoWheel.before_step for the clipped action a and the noise's uniforms
+    u: the turn phase, then the move phase's drive set. plan gets (move, turn sign, x,
+    y, cos, sin of the heading after the turn) for two_wheel_finish. Returns a status."""
+    noise_turn, noise_move = factors(u, floats)
+    turn = -a * floats[F_GAIN0] * noise_turn  # counter-clockwise positive
+    move = floats[F_GAIN1] * (1.0 - abs(a)) * noise_move
+    n_turn, n_move, dt = ints[I_N_FIRST], ints[I_N_REST], floats[F_TIMESTEP]
+    drive(ctrl, ints, floats, 0.0, turn / (n_turn * dt))
+    status = step_phase(m, d, n_turn, bad_qacc, xmat, ints, floats)
+    x, y, heading = base_pose(qpos, xpos, xmat, ints, floats)
+    plan[0] = move
+    plan[1] = 1.0 if turn > 0 else -1.0
+    plan[2], plan[3], plan[4], plan[5] = x, y, math.cos(heading), math.sin(heading)
+    drive(ctrl, ints, floats, move / (n_move * dt), 0.0)
+    return status
+
+
+@njit(cache=True)
+def two_wheel_finish(m, d, ctrl, qpos, xpos, xmat, bad_qacc, ints, floats, plan):
+    """two_wheel.TwoWheel.after_step: a move stopped short by more than the tolerance
+    turns the rest, at MAX_TURN per MAX_MOVE, in the commanded turn's direction; then
+    the drive halts. Returns (status, substeps run, in the goal)."""
+    x, y, _ = base_pose(qpos, xpos, xmat, ints, floats)
+    rest = plan[0] - ((x - plan[2]) * plan[4] + (y - plan[3]) * plan[5])
+    status, n = OK, 0
+    if rest > floats[F_TOLERANCE]:
+        leftover = plan[1] * rest * floats[F_GAIN0] / floats[F_GAIN1]
+        n = ints[I_N_FIRST]
+        drive(ctrl, ints, floats, 0.0, leftover / (n * floats[F_TIMESTEP]))
+        status = step_phase(m, d, n, bad_qacc, xmat, ints, floats)
+    drive(ctrl, ints, floats, 0.0, 0.0)
+    return status, n, goal_reached(qpos, xpos, xmat, ints, floats)
+
+
+@njit(cache=True)
+def two_wheel_step(action, u, noise, m, d, flags, ctrl, qpos, xpos, xmat, sensordata,
+                   bad_qacc, ints, floats, plan):
+    """One agent step of the two-wheel drive, the hooks' work in their order: the turn,
+    the move, a blocked move's leftover turn, the halt, the goal test and the encoded
+    readings. Returns (status, substeps run, in the goal, readings)."""
+    nothing = np.empty(0)
+    if not clip_unit(action):
+        return NOT_FINITE, 0, False, nothing
+    status = two_wheel_turn(action[0], u, m, d, ctrl, qpos, xpos, xmat, bad_qacc, ints,
+                            floats, plan)
+    n = ints[I_N_FIRST]
+    if status != OK:
+        return status, n, False, nothing
+    status = step_phase(m, d, ints[I_N_REST], bad_qacc, xmat, ints, floats)
+    n += ints[I_N_REST]
+    if status != OK:
+        return status, n, False, nothing
+    status, more, goal = two_wheel_finish(m, d, ctrl, qpos, xpos, xmat, bad_qacc, ints,
+                                          floats, plan)
+    n += more
+    if status != OK:
+        return status, n, False, nothing
+    return OK, n, goal, readings(m, d, flags, sensordata, ints, floats, noise)
+
+
+# -- the floating drive (tasks.floating.Physics, bump "grip" or "slide") ---------------
+
+@njit(cache=True)
+def demand(a, ints, floats):
+    """floating.Floating.demand: the velocity change (units/step) for a demand a, by the
+    thrust reading: "scaled" MAX_ACCELERATION a, "demand" a, "clipped" a clipped to
+    [-MAX_ACCELERATION, MAX_ACCELERATION] (Python's min(max(a, -g), g))."""
+    gain = floats[F_GAIN0]
+    reading = ints[I_THRUST]
+    if reading == THRUST_SCALED:
+        return gain * a
+    if reading == THRUST_DEMAND:
+        return a
+    v = -gain if -gain > a else a
+    return gain if gain < v else v
+
+
+@njit(cache=True)
+def floating_thrust(a, u, m, d, ctrl, xmat, bad_qacc, ints, floats):
+    """floating.Floating.before_step for the clipped action a and the noise's uniforms
+    u: the thrust during one substep, then none. Returns a status."""
+    nh, nv = factors(u, floats)
+    scale = floats[F_THRUST]
+    ctrl[ints[I_ACT0]] = demand(a[0], ints, floats) * nh * scale
+    ctrl[ints[I_ACT1]] = demand(a[1], ints, floats) * nv * scale
+    status = step_phase(m, d, ints[I_N_FIRST], bad_qacc, xmat, ints, floats)
+    ctrl[ints[I_ACT0]] = 0.0 * scale
+    ctrl[ints[I_ACT1]] = 0.0 * scale
+    return status
+
+
+@njit(cache=True)
+def velocity_reading(v, noise, ints, floats):
+    """floating.Floating.sense_velocity on the velocity v (changed in place): plus the
+    noise (an empty array: none), then, with the velocity code, the 0-255 code over
+    +-full scale and back (np.clip as numpy's maximum then minimum)."""
+    if noise.shape[0]:
+        for i in range(v.shape[0]):
+            v[i] = v[i] + noise[i]
+    if ints[I_VELOCITY_CODE]:
+        half, full = floats[F_LEVELS] / 2, floats[F_VELOCITY_FULL]
+        for i in range(v.shape[0]):
+            x = v[i] / full
+            x = x if x > -1.0 else -1.0
+            x = x if x < 1.0 else 1.0
+            code = np.rint(x * half + half)
+            v[i] = (code - half) / half * full
+    return v
+
+
+@njit(cache=True)
+def floating_step(action, u, noise, velocity_noise, m, d, flags, ctrl, qpos, xpos, xmat,
+                  sensordata, bad_qacc, ints, floats, velocity6):
+    """One agent step of the floating drive, the hooks' work in their order: the thrust,
+    the coast, the goal test, the encoded readings and the velocity reading. Returns
+    (status, substeps run, in the goal, readings, velocity)."""
+    nothing = np.empty(0)
+    if not clip_unit(action):
+        return NOT_FINITE, 0, False, nothing, nothing
+    status = floating_thrust(action, u, m, d, ctrl, xmat, bad_qacc, ints, floats)
+    n = ints[I_N_FIRST]
+    if status != OK:
+        return status, n, False, nothing, nothing
+    status = step_phase(m, d, ints[I_N_REST], bad_qacc, xmat, ints, floats)
+    n += ints[I_N_REST]
+    if status != OK:
+        return status, n, False, nothing, nothing
+    goal = goal_reached(qpos, xpos, xmat, ints, floats)
+    codes = readings(m, d, flags, sensordata, ints, floats, noise)
+    v = velocity(m, d, ints[I_BASE], floats[F_VELOCITY], velocity6)
+    return OK, n, goal, codes, velocity_reading(v, velocity_noise, ints, floats)

@@ -1,0 +1,81 @@
+"""The tasks' compiled step (tasks.kernels) against dm_control's hooks, step for step."""
+import mujoco
+import numpy as np
+import pytest
+
+import tasks
+from tasks import kernels
+
+
+def _pair(robot, **fields):
+    compiled, hooks = tasks.load(robot, seed=7, **fields), tasks.load(robot, seed=7, **fields)
+    hooks.compiled = False
+    return compiled, hooks
+
+
+@pytest.mark.parametrize("robot,fields", [
+    ("two_wheel", {}),
+    ("two_wheel", {"sensor_noise": 0.0, "action_noise": 0.0}),
+    ("floating", {}),
+    ("floating", {"thrust": "clipped", "bump": "slide"}),
+    ("floating", {"thrust": "demand", "action_noise": 0.0}),
+    ("floating", {"velocity_noise": 0.1, "velocity_code": "code"}),
+    ("floating", {"velocity_code": "code", "sensor_noise": 0.0}),
+    ("floating", {"velocity_noise": 0.05, "wall_friction": 0.3}),
+])
+def test_the_compiled_step_is_the_hooks_step_for_step(robot, fields):
+    compiled, hooks = _pair(robot, **fields)
+    assert compiled._task.compiled_step  # the drive has a compiled step
+    dim = compiled.action_spec().shape[0]
+    rng = np.random.default_rng(3)
+    ts = [compiled.reset(), hooks.reset()]
+    goals = 0
+    for i in range(600):
+        # out-of-range demands (clipped); after step 300, straight into the goal
+        action = rng.uniform(-1.3, 1.3, dim)
+        if 300 < i < 310:
+            action = np.array([0.0] if dim == 1 else [1.0, 0.0])
+        a, b = compiled.step(action), hooks.step(action)
+        assert a.step_type == b.step_type and a.reward == b.reward and a.discount == b.discount
+        assert a.observation.keys() == b.observation.keys()
+        for key in a.observation:
+            assert a.observation[key].tobytes() == b.observation[key].tobytes(), (i, key)
+        assert compiled.physics.robot_pose() == hooks.physics.robot_pose()
+        assert compiled.physics.substeps == hooks.physics.substeps
+        goals += a.reward or 0.0
+        if i == 300:  # a goal step: both placed next to it, then driven in
+            for env in (compiled, hooks):
+                lo, hi = env.physics.goal_box
+                env.physics.set_robot_pose(lo[0] - 0.5, (lo[1] + hi[1]) / 2, 0.0)
+    assert goals >= 1
+    compiled.close(), hooks.close()
+
+
+def test_the_compiled_step_refuses_what_the_hooks_refuse():
+    compiled, hooks = _pair("two_wheel")
+    compiled.reset(), hooks.reset()
+    for bad in ([np.nan], [np.inf], [0.1, 0.2]):
+        with pytest.raises(ValueError) as e1:
+            compiled.step(bad)
+        with pytest.raises(ValueError) as e2:
+            hooks.step(bad)
+        assert str(e1.value) == str(e2.value)
+    # a 0-d action is the one-dimensional drive's action
+    a, b = compiled.step(np.float64(0.25)), hooks.step(np.float64(0.25))
+    assert a.observation["range"].tobytes() == b.observation["range"].tobytes()
+    compiled.close(), hooks.close()
+
+
+def test_the_struct_views_are_the_fields_they_name():
+    env = tasks.load("two_wheel", seed=0)
+    m, d = env.physics.model.ptr, env.physics.data.ptr
+    flags = kernels.disable_flags(m)
+    assert flags[0] == m.opt.disableflags
+    flags[0] ^= int(mujoco.mjtDisableBit.mjDSBL_WARMSTART)
+    assert flags[0] == m.opt.disableflags
+    flags[0] ^= int(mujoco.mjtDisableBit.mjDSBL_WARMSTART)
+    count = kernels.warning_count(d, mujoco.mjtWarning.mjWARN_BADQACC)
+    d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number = 3
+    assert count[0] == 3
+    d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number = 0
+    env.close()
