@@ -336,7 +336,7 @@ def _run_ray(specs, workers, done):
                 result = ray.get(ready[0])
             except ray.exceptions.RayTaskError as e:  # the run raised: its error as .cause
                 done(spec, error=e)
-            except (died, ray.exceptions.RayError) as e:
+            except died + (ray.exceptions.RayError,) as e:
                 # A worker that died, unless the whole cluster went with it.
                 while not _answers(gcs):
                     answered = check(answered)
