@@ -5,15 +5,23 @@ arrives, so any worker count and either backend give identical files, and a run
 killed at any moment leaves only an unfinished folder that the next call redoes.
 
 A run that raises is recorded as failed (results.write_failure: run.json with
-status "failed" and the error) while the others go on; a rerun retries it. A
-worker process that dies takes the pool with it: the runs it held are then run
-again one at a time, so only the one that kills its worker is recorded as failed.
-Ctrl-C stops the local pool's workers at once; finished runs stay on disk.
+status "failed" and the error) while the others go on; a rerun retries it. Every
+local run is made in a worker process, even with one worker, so that a run that
+kills its process (a segfault in native code, the out-of-memory killer) cannot take
+the command with it. A worker process that dies takes the pool with it: the runs
+it held are then run again one at a time on one worker, so only a run whose worker
+dies again is recorded as failed (WorkerDied, with the signal). Ray retries a task
+whose worker died once, then it is recorded the same way; a lost cluster is one
+line (ClusterLost). A results folder that cannot be written (full, read-only) stops
+the command (results.WriteError). Ctrl-C stops the local pool's workers at once;
+finished runs stay on disk.
 
 Test only: EBRL_TEST_FAIL="two_wheel/avoidance/1,floating/random/0" makes those
 runs (robot/condition/seed) raise a dm_control PhysicsError in the worker, and
-EBRL_TEST_CRASH, with the same syntax, makes their pool worker process exit
-abruptly; both exist for the tests of failure handling and are never set otherwise.
+EBRL_TEST_CRASH, with the same syntax, makes their worker process exit abruptly
+(status 70), or with "robot/condition/seed:SIGSEGV" crash in native code (ctypes
+reads address 0) or with ":SIGKILL" (any signal's name) be killed, once the run is
+computed; they exist for the tests of failure handling and are never set otherwise.
 """
 import collections
 import logging
@@ -146,9 +154,10 @@ def _run_local(specs, workers, done):
         queue = list(specs)
         while queue:
             lost, queue, _ = _pool(queue, workers, done)
-            for spec in lost:  # a worker died: each of its pool's runs again, alone
-                again, _, exits = _pool([spec], 1, done)
-                if again:
+            while lost:  # a worker died: its pool's runs again, one at a time on one worker,
+                # so that a run whose worker dies again is known: recorded, the rest go on
+                again, lost, exits = _pool(lost, 1, done)
+                for spec in again:
                     done(spec, error=WorkerDied.of(spec, exits[0] if exits else None))
     finally:
         for k, v in saved.items():

@@ -236,3 +236,76 @@ def test_a_lost_ray_cluster_is_one_line_and_keeps_the_finished_runs(clean, tmp_p
                 env=dict(env(), RAY_ADDRESS=cluster))
     assert proc.stdout.strip().startswith(f"{8 - len(done)} runs made, {len(done)} already")
     assert summary(out) == summary(clean) and arrays(out) == arrays(clean)
+
+
+# -- studies (`ebrl fit`) --------------------------------------------------------------
+FIT = ["fit", "--trials", "8", "--batch", "2", "--seeds", "0", "--promote-seeds", "0",
+       "--space", "policy_threshold", "--steps", "200", "--workers", "2", "--no-progress"]
+
+
+def trials(out):
+    import optuna
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    return optuna.load_study(study_name="fit", storage=f"sqlite:///{out}/study.db").trials
+
+
+def test_a_study_killed_at_random_moments_is_continued_by_the_same_command(tmp_path):
+    pytest.importorskip("optuna")
+    import random
+
+    import optuna
+
+    from experiments import fit, results, study
+    out = tmp_path / "fit"
+    rng = random.Random(21)  # the moments: random, the same on every run of the test
+    kills = 0
+    for _ in range(3):
+        proc = subprocess.Popen([sys.executable, "-m", "experiments", *FIT, "--out", str(out)],
+                                cwd=ROOT, env=env(), stdout=subprocess.DEVNULL,
+                                stderr=subprocess.PIPE, start_new_session=True)
+        try:
+            proc.wait(timeout=rng.uniform(1.0, 8.0))
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, 9)  # SIGKILL, the command and its workers
+            proc.wait()
+            kills += 1
+        else:
+            break
+    assert kills >= 1
+    proc = ebrl(*FIT, "--out", out, env=env())  # the same command continues
+    assert "trials made now" in proc.stdout and proc.stderr.strip() == ""
+    got = trials(out)
+    states = [t.state for t in got]
+    assert optuna.trial.TrialState.RUNNING not in states
+    interrupted = [t for t in got if t.user_attrs.get("error") == study.INTERRUPTED]
+    assert all(t.state == optuna.trial.TrialState.FAIL for t in interrupted)
+    complete = [t for t in got if t.state == optuna.trial.TrialState.COMPLETE]
+    assert len(complete) == 8 and len(got) == 8 + len(interrupted)
+    # Every score is the one its runs on disk give: nothing half-written was scored.
+    problem = fit.Problem(names=("policy_threshold",), rungs=((0,),), steps=200)
+    for t in complete:
+        runs = {}
+        for spec in problem.specs(t.params, (0,)):
+            runs.update(results.load_runs(study.run_folder(out, spec), [spec]))
+        assert t.value == problem.score(t.params, runs)[0]
+    assert leftovers(out) == []
+
+
+def test_a_trial_whose_runs_failed_is_marked_failed_not_scored(tmp_path):
+    pytest.importorskip("optuna")
+    import optuna
+    out = tmp_path / "fit"
+    args = [*FIT[:2], "2", *FIT[3:], "--out", out]  # two trials
+    proc = ebrl(*args, env=env(EBRL_TEST_FAIL="floating/random/0"), check=False)
+    assert proc.returncode == 1, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "trial 0" in lines[0] and "PhysicsError" in lines[0], proc.stderr
+    got = trials(out)
+    assert [t.state for t in got] == [optuna.trial.TrialState.FAIL] * 2
+    for t in got:
+        assert t.value is None and "rungs" not in t.user_attrs
+        assert "floating/random/seed_000: PhysicsError" in t.user_attrs["error"]
+    # One more trial, without the failure: scored.
+    proc = ebrl(*FIT[:2], "3", *FIT[3:], "--out", out, env=env())
+    got = trials(out)
+    assert got[2].state == optuna.trial.TrialState.COMPLETE and got[2].value is not None
