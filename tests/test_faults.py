@@ -249,6 +249,18 @@ def trials(out):
     return optuna.load_study(study_name="fit", storage=f"sqlite:///{out}/study.db").trials
 
 
+def running(out):
+    """Whether the study's SQLite storage holds a running trial (read as it is written)."""
+    import sqlite3
+    if not (out / "study.db").exists():
+        return False
+    try:
+        with sqlite3.connect(f"file:{out / 'study.db'}?mode=ro", uri=True, timeout=1) as db:
+            return db.execute("SELECT COUNT(*) FROM trials WHERE state = 'RUNNING'").fetchone()[0] > 0
+    except sqlite3.Error:  # the tables not made yet
+        return False
+
+
 def test_a_study_killed_at_random_moments_is_continued_by_the_same_command(tmp_path):
     pytest.importorskip("optuna")
     import random
@@ -259,12 +271,18 @@ def test_a_study_killed_at_random_moments_is_continued_by_the_same_command(tmp_p
     out = tmp_path / "fit"
     rng = random.Random(21)  # the moments: random, the same on every run of the test
     kills = 0
-    for _ in range(3):
+    for attempt in range(3):
         proc = subprocess.Popen([sys.executable, "-m", "experiments", *FIT, "--out", str(out)],
                                 cwd=ROOT, env=env(), stdout=subprocess.DEVNULL,
                                 stderr=subprocess.PIPE, start_new_session=True)
         try:
-            proc.wait(timeout=rng.uniform(1.0, 8.0))
+            if attempt == 0:  # the first kill while trials run, so that some are left running
+                deadline = time.time() + 120
+                while time.time() < deadline and proc.poll() is None and not running(out):
+                    time.sleep(0.1)
+                proc.wait(timeout=rng.uniform(0.0, 1.0))
+            else:  # then at any moment, the start included
+                proc.wait(timeout=rng.uniform(1.0, 8.0))
         except subprocess.TimeoutExpired:
             os.killpg(proc.pid, 9)  # SIGKILL, the command and its workers
             proc.wait()
@@ -278,7 +296,7 @@ def test_a_study_killed_at_random_moments_is_continued_by_the_same_command(tmp_p
     states = [t.state for t in got]
     assert optuna.trial.TrialState.RUNNING not in states
     interrupted = [t for t in got if t.user_attrs.get("error") == study.INTERRUPTED]
-    assert all(t.state == optuna.trial.TrialState.FAIL for t in interrupted)
+    assert interrupted and all(t.state == optuna.trial.TrialState.FAIL for t in interrupted)
     complete = [t for t in got if t.state == optuna.trial.TrialState.COMPLETE]
     assert len(complete) == 8 and len(got) == 8 + len(interrupted)
     # Every score is the one its runs on disk give: nothing half-written was scored.
