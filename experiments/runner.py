@@ -9,8 +9,10 @@ status "failed" and the error) while the others go on; a rerun retries it. Every
 local run is made in a worker process, even with one worker, so that a run that
 kills its process (a segfault in native code, the out-of-memory killer) cannot take
 the command with it. A worker process that dies takes the pool with it: the runs
-it held are then run again one at a time on one worker, so only a run whose worker
-dies again is recorded as failed (WorkerDied, with the signal). Ray retries a task
+it held run again first on a fresh pool; a run in flight at a second death is run
+alone once more (at once, with one worker), and recorded as failed (WorkerDied,
+with the signal) if its worker dies then too, so a random kill costs one restart of
+the pool and a run that crashes its worker is named. Ray retries a task
 whose worker died once, then it is recorded the same way; a lost cluster is one
 line (ClusterLost). A results folder that cannot be written (full, read-only) stops
 the command (results.WriteError). Ctrl-C stops the local pool's workers at once;
@@ -151,12 +153,19 @@ def _run_local(specs, workers, done):
     saved = {k: os.environ.get(k) for k in _SINGLE_THREAD}
     os.environ.update(_SINGLE_THREAD)
     try:
-        queue = list(specs)
+        queue, deaths = list(specs), collections.Counter()
         while queue:
-            lost, queue, _ = _pool(queue, workers, done)
-            while lost:  # a worker died: its pool's runs again, one at a time on one worker,
-                # so that a run whose worker dies again is known: recorded, the rest go on
-                again, lost, exits = _pool(lost, 1, done)
+            lost, rest, exits = _pool(queue, workers, done)
+            deaths.update(lost)
+            # A run whose worker died runs again first. One in flight at two deaths is a
+            # suspect: alone already (one worker), recorded; else it runs once more alone.
+            if workers == 1:
+                for spec in [s for s in lost if deaths[s] >= 2]:
+                    done(spec, error=WorkerDied.of(spec, exits[0] if exits else None))
+            suspects = [s for s in lost if deaths[s] >= 2 and workers > 1]
+            queue = [s for s in lost if deaths[s] < 2] + rest
+            while suspects:  # one at a time on one worker, so a death names its run
+                again, suspects, exits = _pool(suspects, 1, done)
                 for spec in again:
                     done(spec, error=WorkerDied.of(spec, exits[0] if exits else None))
     finally:

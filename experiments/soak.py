@@ -85,7 +85,7 @@ def main(argv=None):
     p.add_argument("--seeds", default="0-127", help="seeds per robot and condition")
     p.add_argument("--steps", type=int, default=200)
     p.add_argument("--workers", type=int, default=2)
-    p.add_argument("--every", default="1-4", help="seconds between kills, LO-HI (uniform)")
+    p.add_argument("--every", default="3-8", help="seconds between kills, LO-HI (uniform)")
     p.add_argument("--rng", type=int, default=0, help="seed of the kills' timing and target")
     p.add_argument("--out", type=pathlib.Path, default=None,
                    help="folder for the two result sets (default: a temporary one)")
