@@ -2,8 +2,9 @@
 check, sweep, ablate, fit, demo.
 
 Exit status: 0 done; 1 some runs failed (each recorded in its run.json, named by the
-report, retried by a rerun); 2 a bad argument (one line, nothing written); 130 Ctrl-C
-(finished runs kept; the same command resumes).
+report, retried by a rerun); 2 a bad argument (one line, nothing written), or a results
+folder that cannot be written or a lost Ray cluster (one line; finished runs kept, the same
+command resumes); 130 Ctrl-C (finished runs kept; the same command resumes).
 """
 import argparse
 import os

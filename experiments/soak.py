@@ -1,10 +1,11 @@
 """A soak of the runner's fault handling (a benchmark, not a test):
 
-    python -m experiments.soak [--seeds 0-127] [--steps 200] [--workers 2] [--every 1-4]
+    python -m experiments.soak [--seeds 0-127] [--steps 200] [--workers 2] [--every 3-8]
 
 `ebrl run` on the paper's robots, both conditions and the given seeds (512 short runs by
-default) while a worker process, picked at random, is killed (SIGKILL, as the
-out-of-memory killer does) every few seconds; the same command again, without kills,
+default) while a worker process, picked at random among those past their start (1.5 s
+of CPU: running runs), is killed (SIGKILL, as the out-of-memory killer does) every few
+seconds; the same command again, without kills,
 until it exits 0 (each pass retries the runs whose worker died twice); then the same set
 clean in another folder. It prints the figures and exits 1 unless both folders hold every
 run and the same summary.json, trials and traces.
@@ -23,17 +24,19 @@ import time
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 
-def _workers_of(pid):
-    """The live spawn worker processes whose parent is pid."""
+def _workers_of(pid, min_cpu):
+    """The live spawn worker processes whose parent is pid and which have used at least
+    min_cpu seconds of CPU (past their imports: running runs)."""
     found = []
+    tick = os.sysconf("SC_CLK_TCK")
     for entry in pathlib.Path("/proc").iterdir():
         try:
-            stat = (entry / "stat").read_text()
-            state, ppid = stat.rsplit(")", 1)[1].split()[:2]
-            if (int(ppid) == pid and state != "Z"
+            fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+            state, ppid, cpu = fields[0], int(fields[1]), (int(fields[11]) + int(fields[12])) / tick
+            if (ppid == pid and state != "Z" and cpu >= min_cpu
                     and b"spawn_main" in (entry / "cmdline").read_bytes()):
                 found.append(int(entry.name))
-        except (OSError, ValueError):
+        except (OSError, ValueError, IndexError):
             continue
     return found
 
@@ -56,13 +59,14 @@ def _killed_pass(args, out, rng):
         time.sleep(0.05)
         if time.monotonic() < next_kill:
             continue
-        workers = _workers_of(proc.pid)
-        if workers:
-            try:
-                os.kill(rng.choice(workers), signal.SIGKILL)
-                kills += 1
-            except ProcessLookupError:
-                pass
+        workers = _workers_of(proc.pid, args.min_cpu)
+        if not workers:  # none past its start yet: the kill waits for one
+            continue
+        try:
+            os.kill(rng.choice(workers), signal.SIGKILL)
+            kills += 1
+        except ProcessLookupError:
+            pass
         next_kill = time.monotonic() + rng.uniform(lo, hi)
     _, err = proc.communicate()
     return proc.returncode, kills, (err.strip().splitlines() or [""])[-1]
@@ -86,6 +90,8 @@ def main(argv=None):
     p.add_argument("--steps", type=int, default=200)
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--every", default="3-8", help="seconds between kills, LO-HI (uniform)")
+    p.add_argument("--min-cpu", type=float, default=1.5,
+                   help="kill only workers past their start: this much CPU used (s)")
     p.add_argument("--rng", type=int, default=0, help="seed of the kills' timing and target")
     p.add_argument("--out", type=pathlib.Path, default=None,
                    help="folder for the two result sets (default: a temporary one)")
