@@ -22,9 +22,9 @@ READINGS = {
     # 2.1: when the memory is full, forget the least reliable element (first slot on
     # ties), or the oldest (smallest time stamp).
     "forgetting": ("least_reliable", "oldest"),
-    # eq 9: inside the dead zone the fallback's previous acceleration on that axis is
-    # kept (eq 9's "not changed"; 0 again after a trial's end), or it is 0.
-    "eq9_dead_zone": ("keep", "zero"),
+    # eq 9: inside the dead zone the acceleration on that axis is 0, or the fallback's
+    # previous acceleration on that axis is kept (0 again after a trial's end).
+    "eq9_dead_zone": ("zero", "keep"),
     # 3.4: with probability intrinsic_random_rate the random action replaces the
     # avoidance action, or is added to it (the sum clipped to [-1, 1]).
     "random_in_avoidance": ("replace", "add"),
@@ -56,7 +56,7 @@ class Config:
     reliability_rate: float = 0.5  # rho, eq 7
     # Readings the paper leaves open (docs/interpretation.md).
     policy_threshold: float = 0.0  # eq 5's measure must exceed this for memory to act
-    initial_reliability: float = 0.5  # a new element's; protocol 4 (docs/interpretation.md)
+    initial_reliability: float = 1.0
     initial_utility: float = 0.0
     utility_cutoff: float = 1e-4   # eq 6 stops where gamma^k falls below this
     variance_floor: float = 1e-6   # V_i floor in eq 2

@@ -195,7 +195,7 @@ def validate_best(problem, trial_params, out, seeds, workers=None, backend="loca
         value, terms, claims = objective(summary)
         rows[name] = {"value": value, "groups": summary["groups"],
                       "claims": [[c, o, bool(h)] for c, o, h in claims]}
-    data = {"seeds": list(seeds), "params": trial_params, "rows": rows}
+    data = {"seeds": list(seeds), "params": trial_params, "steps": problem.steps, "rows": rows}
     results.atomic_write(pathlib.Path(out) / "validation.json", results.dumps(data))
     return data, []
 
@@ -301,14 +301,18 @@ def tables(s, out, names):
         v = json.loads(vpath.read_text())
         rows = v["rows"]
         seeds = v["seeds"]
+        budget = "the paper's budgets" if v.get("steps") is None else f"{v['steps']:,} steps a run"
         lines += ["", f"Held-out validation on seeds {seeds[0]}-{seeds[-1]} ({len(seeds)} seeds "
-                  "the search never used), full budgets: the best trial's readings ("
+                  f"the search never used), {budget}: the best trial's readings ("
                   f"{setting_text(v['params'])}) beside the defaults. 95% intervals are "
                   "percentile bootstraps over seeds.", ""]
         lines += _figure_rows({"best": rows["best"]["groups"], "defaults": rows["defaults"]["groups"]})
         lines += ["", "| claim | best | defaults |", "|---|---|---|"]
-        for (c, o, h), (_, o2, h2) in zip(rows["best"]["claims"], rows["defaults"]["claims"]):
-            lines.append(f"| {c} | {o} ({'holds' if h else 'fails'}) | {o2} ({'holds' if h2 else 'fails'}) |")
+        def verdicts(row):
+            return {c: f"{o} ({'holds' if h else 'fails'})" for c, o, h in row["claims"]}
+        best_v, default_v = verdicts(rows["best"]), verdicts(rows["defaults"])
+        for c in dict.fromkeys(list(best_v) + list(default_v)):
+            lines.append(f"| {c} | {best_v.get(c, '-')} | {default_v.get(c, '-')} |")
         lines.append("")
         lines.append(f"Objective: best {rows['best']['value']:.3g}, defaults "
                      f"{rows['defaults']['value']:.3g}; claims held: best "

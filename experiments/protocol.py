@@ -15,7 +15,7 @@ import numpy as np
 import ebrl
 
 #: Bump when a change alters what a run computes, so stale results are not reused.
-PROTOCOL_VERSION = 4  # 4: eq9_dead_zone=keep and initial_reliability=0.5 by default; 3: the compiled agent's float64 similarity; 2: f5fc609
+PROTOCOL_VERSION = 3  # 3: the compiled agent's float64 similarity; 2: f5fc609
 #: Positions are stored as int16 hundredths of a unit.
 TRACE_SCALE = 100.0
 

@@ -70,30 +70,27 @@ def load(name, storage, out, seed=0, create=True):
                                direction="minimize", load_if_exists=True)
 
 
-#: The error recorded on a trial that a kill or Ctrl-C left running.
-INTERRUPTED = "interrupted; asked again"
-
-
 def _rescue(study):
-    """Trials left running by a kill: failed, and their settings enqueued again. (The
-    mark goes first: Optuna refuses an attribute on a finished trial; a kill between the
-    two steps leaves the trial running, rescued again next time.)"""
+    """Trials left running by a kill: failed, and their settings enqueued again."""
     import optuna
     running = study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.RUNNING,))
     for t in running:
         study._storage.set_trial_user_attr(t._trial_id, "error", INTERRUPTED)
-        study.enqueue_trial(t.params, skip_if_exists=False)
         study.tell(t.number, state=optuna.trial.TrialState.FAIL)
+        study.enqueue_trial(t.params, skip_if_exists=False)
     return len(running)
 
 
+INTERRUPTED = "interrupted; asked again"
+
+
 def _finished(study):
-    """The trials that count towards n_trials: complete ones, and failed ones unless a
-    kill interrupted them (their settings are asked again)."""
+    """The trials that count towards n_trials: complete, or failed by their runs (not
+    those a kill interrupted, whose settings were asked again)."""
     import optuna
     return [t for t in study.get_trials(deepcopy=False)
-            if t.state == optuna.trial.TrialState.COMPLETE
-            or (t.state == optuna.trial.TrialState.FAIL
+            if t.state == optuna.trial.TrialState.COMPLETE or (
+                t.state == optuna.trial.TrialState.FAIL
                 and t.user_attrs.get("error") != INTERRUPTED)]
 
 
@@ -111,7 +108,8 @@ def _promoted(value, study, share):
 
 def optimize(problem, study, out, n_trials, *, batch=4, workers=None, backend="local",
              promote=0.1, progress=True):
-    """Runs trials until the study holds n_trials finished ones; returns an Outcome."""
+    """Runs trials until the study holds n_trials finished ones (complete, or failed by
+    their runs); returns an Outcome."""
     import optuna
     out = pathlib.Path(out)
     _rescue(study)

@@ -123,6 +123,9 @@ def test_eq5_policy_by_hand():
 
 
 def _agent(**kw):
+    """New elements start at reliability 1 in these hand-computed cases (a case may set
+    another value)."""
+    kw = {"initial_reliability": 1.0, **kw}
     return ebrl.Agent(ebrl.Config(**kw), 2, 1, lambda r, rng: np.array([-0.5]), seed=0)
 
 

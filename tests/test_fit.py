@@ -1,0 +1,157 @@
+"""`ebrl fit`: the objective by hand, a tiny study that runs and resumes through the real
+command line, its readings reaching the runs, and bad arguments."""
+import json
+import math
+import pathlib
+import subprocess
+import sys
+
+import pytest
+
+from experiments import fit, paper, study
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+def ebrl(*args):
+    return subprocess.run([sys.executable, "-m", "experiments", *map(str, args)], cwd=ROOT,
+                          capture_output=True, text=True, timeout=600)
+
+
+def _group(robot, condition, first, per_trial, goals_min=60, below_30=0, seeds=50):
+    drive = robot
+    budget = 30_000 if drive == "two_wheel" else 100_000
+    shrink = per_trial / first
+    return {"robot": robot, "condition": condition, "drive": drive, "agent": "ebrl",
+            "steps": budget, "seeds": seeds,
+            "first_trial_steps": {"mean": first, "ci95": [first * 0.9, first * 1.1]},
+            "steps_per_trial": {"mean": per_trial, "ci95": [per_trial * 0.9, per_trial * 1.1]},
+            "shrink": shrink, "shrink_ci95": [shrink * 0.8, min(shrink * 1.2, 0.99)],
+            "goals": {"min": goals_min, "median": 100.0, "max": 200, "below_30": below_30}}
+
+
+def _paper_summary(change=None):
+    """A made-up summary whose figures are the paper's, with every claim holding."""
+    groups = []
+    for (drive, condition), ref in paper.RESULTS.items():
+        first = ref["first_trial_steps"]["mean"]
+        per_trial = ref["steps_per_trial"]["mean"]
+        first, per_trial = (change or {}).get((drive, condition), (first, per_trial))
+        groups.append(_group(drive, condition, first, per_trial,
+                             below_30=45 if condition == "random" else 0))
+    return {"groups": groups}
+
+
+def test_the_objective_is_zero_at_the_papers_figures():
+    value, terms, claims = fit.objective(_paper_summary())
+    assert len(terms) == 12 and len(claims) == 10
+    # The paper's own shrinks differ a little from per_trial / first (0.63 against
+    # 3,844 / 6,087 = 0.6315...): those terms are the only ones above zero.
+    for key, term in terms.items():
+        if not key.endswith("shrink"):
+            assert term == 0.0, key
+    assert all(held for _, _, held in claims)
+    shrink_terms = {k: v for k, v in terms.items() if k.endswith("shrink")}
+    want = (math.log((3844 / 6087) / 0.63) / 0.3) ** 2
+    assert shrink_terms["two_wheel/random/shrink"] == pytest.approx(want)
+    assert value == pytest.approx(sum(terms.values()) / 12)
+
+
+def test_the_objective_by_hand_on_a_changed_figure_and_a_failing_claim():
+    # Floating avoidance: steps per trial e times the paper's (log ratio 1); still shorter
+    # than the random walk's (1,869 e = 5,080 < 8,426), so no claim fails.
+    value, terms, claims = fit.objective(_paper_summary(
+        {("floating", "avoidance"): (5433, 1869 * math.e)}))
+    scale = math.log(1 + 699 / 1869)           # the paper's sd over its mean
+    assert terms["floating/avoidance/steps_per_trial"] == pytest.approx((1 / scale) ** 2)
+    # Its shrink moves by the same factor e: log ratio 1 + the paper's own offset.
+    offset = math.log((1869 / 5433) / 0.34)
+    assert terms["floating/avoidance/shrink"] == pytest.approx(((1 + offset) / 0.3) ** 2)
+    assert all(held for _, _, held in claims)
+    # 10 e: longer than the random walk's 8,426, so C8 fails: one penalty.
+    value, terms, claims = fit.objective(_paper_summary(
+        {("floating", "avoidance"): (5433, 18690.0)}))
+    failing = [c for c, _, held in claims if not held]
+    assert failing == ["floating: avoidance cuts steps per trial"]
+    assert value == pytest.approx(sum(terms.values()) / 12 + fit.CLAIM_PENALTY)
+    # A figure that cannot be computed (no run reached the goal) costs MISSING_TERM.
+    s = _paper_summary()
+    s["groups"][0]["first_trial_steps"]["mean"] = None
+    s["groups"][0]["shrink"] = None
+    _, terms, _ = fit.objective(s)
+    assert terms["two_wheel/random/first_trial_steps"] == fit.MISSING_TERM
+
+
+def test_overrides_keep_agent_readings_for_both_robots_and_drop_defaults():
+    params = {"policy_threshold": 0.3, "bump": "stop", "initial_reliability": 0.5,
+              "radius": 2.0, "thrust": "scaled"}
+    assert fit.overrides(params, "two_wheel") == (("policy_threshold", 0.3),)
+    assert fit.overrides(params, "floating") == (("bump", "stop"), ("policy_threshold", 0.3),
+                                                 ("radius", 2.0))
+
+
+def _trials(out):
+    import optuna
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    return optuna.load_study(study_name="fit", storage=study.storage_url(None, out)).trials
+
+
+FIT = ["fit", "--seeds", "0", "--promote-seeds", "0", "--steps", "1500", "--batch", "2",
+       "--workers", "1", "--no-progress", "--space", "policy_threshold,bump,thrust,episode"]
+
+
+def test_a_tiny_study_runs_resumes_and_reaches_the_runs(tmp_path):
+    out = tmp_path / "fit"
+    proc = ebrl(*FIT, "--trials", "2", "--out", out)
+    assert proc.returncode == 0, proc.stderr
+    trials = _trials(out)
+    assert [t.number for t in trials] == [0, 1] and all(t.state.name == "COMPLETE" for t in trials)
+    assert trials[0].params == {"policy_threshold": 0.0, "bump": "grip", "thrust": "scaled",
+                                "episode": "trial"}  # trial 0: the defaults
+    figures = trials[1].user_attrs["rungs"][0]["figures"]
+    assert set(figures) == {f"{r}/{c}/{f}" for r in fit.ROBOTS for c in paper.CONDITIONS
+                            for f in fit.FIGURES}
+    # Trial 1's readings reach its floating runs' config.json.
+    params = trials[1].params
+    folder = out / "runs" / study.folder_key(fit.overrides(params, "floating"))
+    config = json.loads((folder / "floating" / "avoidance" / "seed_000" / "config.json").read_text())
+    assert config["agent"]["policy_threshold"] == params["policy_threshold"]
+    assert config["agent"]["episode"] == params["episode"]
+    assert (config["task"]["bump"], config["task"]["thrust"]) == (params["bump"], params["thrust"])
+    assert (out / "FIT.md").exists() and (out / "fit_objective.png").exists()
+
+    # A kill mid-trial leaves it running in the storage: the next call fails it and asks
+    # its readings again first, reusing its runs.
+    import optuna
+    s = optuna.load_study(study_name="fit", storage=study.storage_url(None, out))
+    left = s.ask(fit.Problem(names=tuple(params)).distributions())
+    proc = ebrl(*FIT, "--trials", "4", "--out", out)
+    assert proc.returncode == 0, proc.stderr
+    trials = _trials(out)
+    assert [t.number for t in trials] == [0, 1, 2, 3, 4]
+    assert trials[2].state.name == "FAIL" and trials[2].user_attrs["error"].startswith("interrupted")
+    assert trials[3].params == left.params and trials[3].state.name == "COMPLETE"
+    assert sum(t.state.name == "COMPLETE" for t in trials) == 4
+    # The same command again: nothing to do, nothing changes.
+    before = (out / "study.db").stat().st_size
+    proc = ebrl(*FIT, "--trials", "4", "--out", out)
+    assert proc.returncode == 0 and "0 trials made now, 5 in the study" in proc.stdout
+    assert len(_trials(out)) == 5 and (out / "study.db").stat().st_size == before
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--space", "colour"], "unknown reading 'colour'"),
+    (["--trials", "0"], "must be positive"),
+    (["--promote", "0"], "--promote must be in (0, 1]"),
+    (["--seeds", "0-3", "--promote-seeds", "0-1"], "--promote-seeds must include"),
+    (["--validate", "0-9"], "--validate seeds must be seeds the search never uses"),
+    (["--trial", "3"], "give --validate too"),
+    (["--storage", "not a url://"], "bad --storage"),
+    (["--backend", "slurm"], "unknown 'slurm'"),
+])
+def test_bad_fit_arguments_are_one_line_and_write_nothing(tmp_path, args, message):
+    out = tmp_path / "fit"
+    proc = ebrl("fit", *args, "--out", out)
+    assert proc.returncode == 2
+    assert message in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
+    assert not out.exists()
