@@ -55,8 +55,13 @@ def _killed_pass(args, out, rng):
     kills = 0
     lo, hi = args.every
     next_kill = time.monotonic() + rng.uniform(lo, hi)
+    started = shown = time.monotonic()
     while proc.poll() is None:
         time.sleep(0.05)
+        if time.monotonic() - shown >= 30:
+            shown = time.monotonic()
+            print(f"  {shown - started:.0f} s: {len(list(out.glob('*/*/seed_*/run.json')))} "
+                  f"runs written, {kills} workers killed", flush=True)
         if time.monotonic() < next_kill:
             continue
         workers = _workers_of(proc.pid, args.min_cpu)
