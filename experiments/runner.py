@@ -303,7 +303,7 @@ class ClusterLost(ConnectionError):
 def _run_ray(specs, workers, done):
     """Runs specs as Ray tasks. A run that raises is recorded as with the local pool; a
     task whose worker dies is tried once more (max_retries=1, as the local pool runs a
-    lost run again alone) and then recorded as WorkerDied. A cluster that stops answering
+    lost run again) and then recorded as WorkerDied. A cluster that stops answering
     for CLUSTER_TIMEOUT seconds raises ClusterLost: the runs written so far stay on disk,
     the others are unfinished and the same command resumes them."""
     try:
@@ -322,7 +322,10 @@ def _run_ray(specs, workers, done):
         if address is None:
             kwargs["num_cpus"] = workers or os.cpu_count() or 1
         ray.init(**kwargs)
-    gcs = ray.get_runtime_context().gcs_address
+    try:
+        gcs = ray.get_runtime_context().gcs_address
+    except Exception:  # a Ray Client connection (ray://): its own errors tell a loss
+        gcs = None
     died = (ray.exceptions.WorkerCrashedError, ray.exceptions.OutOfMemoryError,
             ray.exceptions.NodeDiedError)
     written, lost = 0, False
@@ -372,8 +375,10 @@ def _run_ray(specs, workers, done):
 
 
 def _answers(address, timeout=2.0):
-    """Whether something accepts a connection at address ("host:port")."""
+    """Whether something accepts a connection at address ("host:port"; None: assumed)."""
     import socket
+    if not address:
+        return True
     host, _, port = address.rpartition(":")
     try:
         socket.create_connection((host, int(port)), timeout=timeout).close()

@@ -169,10 +169,32 @@ def test_a_folder_turned_read_only_mid_run_then_writable(clean, tmp_path, small_
 
 
 # -- Ray ---------------------------------------------------------------------------------
-def start_cluster():
+def start_cluster(tries=3):
+    """A local Ray cluster of one head node (2 CPUs), its processes this test's own. Ray
+    waits at most 30 s for its raylet, too little on a heavily loaded machine: tried
+    again then."""
     ray_cluster = pytest.importorskip("ray.cluster_utils")
-    return ray_cluster.Cluster(initialize_head=True,
-                               head_node_args={"num_cpus": 2, "include_dashboard": False})
+    for attempt in range(tries):
+        cluster = ray_cluster.Cluster()
+        try:
+            cluster.add_node(num_cpus=2, include_dashboard=False)
+            return cluster
+        except Exception:
+            cluster.shutdown()
+            _stop_ray_children()  # the half-started node's, which the cluster never kept
+            if attempt == tries - 1:
+                raise
+
+
+def _stop_ray_children():
+    """SIGKILLs this process's own child processes that run Ray's services."""
+    for entry in pathlib.Path("/proc").iterdir():
+        try:
+            ppid = int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1])
+            if ppid == os.getpid() and b"ray" in (entry / "cmdline").read_bytes():
+                os.kill(int(entry.name), 9)
+        except (OSError, ValueError, IndexError):
+            continue
 
 
 @pytest.fixture(scope="module")
