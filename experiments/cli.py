@@ -2,8 +2,9 @@
 check, sweep, ablate, fit, demo.
 
 Exit status: 0 done; 1 some runs failed (each recorded in its run.json, named by the
-report, retried by a rerun); 2 a bad argument (one line, nothing written); 130 Ctrl-C
-(finished runs kept; the same command resumes).
+report, retried by a rerun); 2 a bad argument (one line, nothing written), or a results
+folder that cannot be written or a lost Ray cluster (one line; finished runs kept, the same
+command resumes); 130 Ctrl-C (finished runs kept; the same command resumes).
 """
 import argparse
 import os
@@ -627,9 +628,14 @@ def main(argv=None):
     except KeyboardInterrupt:
         print("ebrl: interrupted; finished runs are kept, rerun to resume", file=sys.stderr)
         return INTERRUPTED
-    except OSError as e:  # a disk that fills or a folder removed under the command, say
+    except OSError as e:  # a disk that fills, a folder removed, a lost Ray cluster, say
         where = f": {e.filename}" if e.filename else ""
-        return _fail(f"{e.strerror or e}{where}")
+        status = _fail(f"{e.strerror or e}{where}")
+        if getattr(e, "exit_now", False):  # a lost Ray cluster: Ray's exit would wait on it
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(status)
+        return status
 
 
 if __name__ == "__main__":

@@ -10,6 +10,7 @@ error in one line and the traceback (write_failure). It is never averaged, the
 report names it, and a rerun retries it.
 """
 import csv
+import errno
 import io
 import json
 import os
@@ -41,22 +42,60 @@ def _umask():
 _UMASK = _umask()
 
 
+class WriteError(ResultsError):
+    """A results folder that cannot take a write (full, read-only, gone): the message
+    names the folder; what is already on disk stays complete."""
+
+
+#: Test only: EBRL_TEST_DISK_FULL=N makes the disk "fill up" in the driver after N run
+#: records: the next run.json write fails halfway with ENOSPC, and every write after it.
+TEST_DISK_FULL = "EBRL_TEST_DISK_FULL"
+_records = 0  # run.json files this process wrote (for TEST_DISK_FULL)
+
+
+def _test_disk_full(path):
+    limit = os.environ.get(TEST_DISK_FULL)
+    if not limit:
+        return False
+    return _records > int(limit) or (_records == int(limit) and path.name == "run.json")
+
+
 def atomic_write(path, data):
-    """Writes bytes or text to path through a temporary file and a rename."""
+    """Writes bytes or text to path through a temporary file and a rename, so that
+    path is either its old self or complete. A write that fails (a full disk, a folder
+    turned read-only) raises WriteError naming the folder, and leaves no temporary file."""
+    global _records
     path = pathlib.Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     mode = "wb" if isinstance(data, bytes) else "w"
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp makes 0600; results are for sharing
+    tmp = None
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+        os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp makes 0600; results are for sharing
         with os.fdopen(fd, mode) as f:
+            if _test_disk_full(path):
+                f.write(data[: len(data) // 2])
+                f.flush()
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
             f.write(data)
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, path)
-    except BaseException:
-        pathlib.Path(tmp).unlink(missing_ok=True)
+    except BaseException as e:
+        if tmp is not None:
+            try:
+                pathlib.Path(tmp).unlink(missing_ok=True)
+            except OSError:
+                pass
+        if isinstance(e, OSError):
+            what = errno.errorcode.get(e.errno, "")
+            raise WriteError(f"cannot write {path.name} in {path.parent}: "
+                             f"{e.strerror or e}{f' ({what})' if what else ''}; what is on "
+                             "disk is kept: free space (or make it writable) and rerun the "
+                             "same command to finish") from e
         raise
+    if path.name == "run.json":
+        _records += 1
 
 
 def dumps(obj):
@@ -125,10 +164,14 @@ def error_line(error, limit=300):
 def write_failure(root, spec, error):
     """Records a run that raised error: run.json with status "failed", the run's
     parameters, the error in one line and its traceback (the worker's, when it came
-    from one). Returns the one-line error."""
+    from one), and for a worker process that died, the signal that ended it ("signal":
+    "SIGSEGV") or its exit status. Returns the one-line error."""
     line = error_line(error)
     record = {"status": "failed", "parameters": spec.parameters(), "error": line,
               "traceback": "".join(traceback.format_exception(error))}
+    for key in ("signal", "exit_status"):  # a worker process that died (runner.WorkerDied)
+        if getattr(error, key, None) is not None:
+            record[key] = getattr(error, key)
     atomic_write(run_dir(root, spec) / "run.json", dumps(record))
     return line
 

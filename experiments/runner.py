@@ -5,17 +5,28 @@ arrives, so any worker count and either backend give identical files, and a run
 killed at any moment leaves only an unfinished folder that the next call redoes.
 
 A run that raises is recorded as failed (results.write_failure: run.json with
-status "failed" and the error) while the others go on; a rerun retries it. A
-worker process that dies takes the pool with it: the runs it held are then run
-again one at a time, so only the one that kills its worker is recorded as failed.
-Ctrl-C stops the local pool's workers at once; finished runs stay on disk.
+status "failed" and the error) while the others go on; a rerun retries it. Every
+local run is made in a worker process, even with one worker, so that a run that
+kills its process (a segfault in native code, the out-of-memory killer) cannot take
+the command with it. A worker process that dies takes the pool with it: the runs
+it held run again first on a fresh pool; a run in flight at a second death is run
+alone once more (at once, with one worker), and recorded as failed (WorkerDied,
+with the signal) if its worker dies then too, so a random kill costs one restart of
+the pool and a run that crashes its worker is named. Ray retries a task
+whose worker died once, then it is recorded the same way; a lost cluster is one
+line (ClusterLost). A results folder that cannot be written (full, read-only) stops
+the command (results.WriteError). Ctrl-C stops the local pool's workers at once;
+finished runs stay on disk.
 
 Test only: EBRL_TEST_FAIL="two_wheel/avoidance/1,floating/random/0" makes those
 runs (robot/condition/seed) raise a dm_control PhysicsError in the worker, and
-EBRL_TEST_CRASH, with the same syntax, makes their pool worker process exit
-abruptly; both exist for the tests of failure handling and are never set otherwise.
+EBRL_TEST_CRASH, with the same syntax, makes their worker process exit abruptly
+(status 70), or with "robot/condition/seed:SIGSEGV" crash in native code (ctypes
+reads address 0) or with ":SIGKILL" (any signal's name) be killed, once the run is
+computed; they exist for the tests of failure handling and are never set otherwise.
 """
 import collections
+import logging
 import os
 import signal
 import threading
@@ -65,23 +76,32 @@ def pending(out, specs):
 
 
 def _selected(variable, spec):
-    """Whether the test-only variable names spec as robot/condition/seed."""
-    wanted = {w.strip() for w in os.environ.get(variable, "").split(",")}
-    return f"{spec.label}/{spec.condition}/{spec.seed}" in wanted
+    """What the test-only variable asks of spec: None when it does not name spec as
+    robot/condition/seed, else the text after the seed's ':' ('' when none)."""
+    me = f"{spec.label}/{spec.condition}/{spec.seed}"
+    for wanted in os.environ.get(variable, "").split(","):
+        name, _, how = wanted.strip().partition(":")
+        if name == me:
+            return how
+    return None
 
 
 def _execute(spec):
-    if _selected(TEST_FAIL, spec):
+    """A worker's task (never run by the driver itself)."""
+    if _selected(TEST_FAIL, spec) is not None:
         from dm_control.rl.control import PhysicsError
         raise PhysicsError(f"failure injected by {TEST_FAIL} (test only) in {spec.name}")
-    if _selected(TEST_CRASH, spec) and _in_worker():
+    crash = _selected(TEST_CRASH, spec)
+    if crash == "":
         os._exit(70)
-    return protocol.execute(spec)
-
-
-def _in_worker():
-    import multiprocessing
-    return multiprocessing.parent_process() is not None
+    result = protocol.execute(spec)
+    if crash == "SIGSEGV":  # a real one: native code reading address 0
+        import ctypes
+        ctypes.string_at(0)
+    elif crash:
+        os.kill(os.getpid(), getattr(signal, crash))
+        time.sleep(60)  # a signal that does not end the process at once
+    return result
 
 
 def run(specs, out, *, workers=None, backend="local", progress=True):
@@ -126,26 +146,28 @@ def run(specs, out, *, workers=None, backend="local", progress=True):
 
 
 def _run_local(specs, workers, done):
+    """Runs specs on spawn worker processes, even for one worker: a run that kills its
+    process (a segfault in native code, the out-of-memory killer) is then recorded
+    with the signal while the others go on."""
     workers = workers or os.cpu_count() or 1
-    if workers == 1:
-        for spec in specs:
-            try:
-                result = _execute(spec)
-            except Exception as e:  # recorded; KeyboardInterrupt goes through
-                done(spec, error=e)
-            else:
-                done(spec, result)
-        return
     saved = {k: os.environ.get(k) for k in _SINGLE_THREAD}
     os.environ.update(_SINGLE_THREAD)
     try:
-        queue = list(specs)
+        queue, deaths = list(specs), collections.Counter()
         while queue:
-            lost, queue = _pool(queue, workers, done)
-            for spec in lost:  # a worker died: each of its pool's runs again, alone
-                for again in _pool([spec], 1, done)[0]:
-                    done(again, error=WorkerDied(f"the worker process running {again.name} "
-                                                 "died (killed, out of memory or crashed)"))
+            lost, rest, exits = _pool(queue, workers, done)
+            deaths.update(lost)
+            # A run whose worker died runs again first. One in flight at two deaths is a
+            # suspect: alone already (one worker), recorded; else it runs once more alone.
+            if workers == 1:
+                for spec in [s for s in lost if deaths[s] >= 2]:
+                    done(spec, error=WorkerDied.of(spec, exits[0] if exits else None))
+            suspects = [s for s in lost if deaths[s] >= 2 and workers > 1]
+            queue = [s for s in lost if deaths[s] < 2] + rest
+            while suspects:  # one at a time on one worker, so a death names its run
+                again, suspects, exits = _pool(suspects, 1, done)
+                for spec in again:
+                    done(spec, error=WorkerDied.of(spec, exits[0] if exits else None))
     finally:
         for k, v in saved.items():
             if v is None:
@@ -155,19 +177,51 @@ def _run_local(specs, workers, done):
 
 
 class WorkerDied(RuntimeError):
-    """A run whose worker process ended without returning (killed, a crash)."""
+    """A run whose worker process ended without returning (killed, a crash); .signal is
+    the signal's name (SIGSEGV, SIGKILL) or None, .exit_status the status or None."""
+
+    def __init__(self, message, signal_name=None, exit_status=None):
+        super().__init__(message)
+        self.signal, self.exit_status = signal_name, exit_status
+
+    @classmethod
+    def of(cls, spec, exitcode, where="worker process"):
+        """The error for spec's run, whose worker ended with exitcode (multiprocessing's:
+        -N for signal N; None when unknown)."""
+        head = f"the {where} running {spec.name}"
+        if exitcode is not None and exitcode < 0:
+            name = _signal_name(-exitcode)
+            what = signal.strsignal(-exitcode) or name
+            hint = {"SIGSEGV": "a crash in native code", "SIGBUS": "a crash in native code",
+                    "SIGABRT": "a crash in native code",
+                    "SIGKILL": "out of memory, or killed by hand"}.get(name)
+            return cls(f"{head} was killed by {name} ({what}{'; ' + hint if hint else ''})",
+                       signal_name=name)
+        if exitcode is not None:
+            return cls(f"{head} exited with status {exitcode} without returning",
+                       exit_status=exitcode)
+        return cls(f"{head} died (killed, out of memory or crashed)")
+
+
+def _signal_name(number):
+    try:
+        return signal.Signals(number).name
+    except ValueError:
+        return f"signal {number}"
 
 
 def _pool(specs, workers, done):
     """Runs specs, in order, on a fresh spawn pool with at most `workers` in flight.
-    Returns (runs lost because a worker died, runs not started then); ([], []) when
-    every run was done or recorded as failed."""
+    Returns (runs lost because a worker died, runs not started then, the exit codes of
+    the worker processes that ended abnormally); ([], [], ...) when every run was done
+    or recorded as failed."""
     import concurrent.futures
     import multiprocessing
     from concurrent.futures.process import BrokenProcessPool
     pool = concurrent.futures.ProcessPoolExecutor(
         workers, mp_context=multiprocessing.get_context("spawn"))
     queue, running, lost, broken = list(reversed(specs)), {}, [], False
+    processes = {}  # every worker process the pool started (it forgets them at shutdown)
 
     def fill():  # keeps `workers` runs in flight, so a dead worker loses few
         nonlocal broken
@@ -178,6 +232,7 @@ def _pool(specs, workers, done):
             except BrokenProcessPool:  # a worker died since the last wait
                 queue.append(spec)
                 broken = True
+            processes.update(getattr(pool, "_processes", None) or {})
 
     try:
         fill()
@@ -201,7 +256,10 @@ def _pool(specs, workers, done):
         _stop(pool)
         raise
     pool.shutdown(wait=True)
-    return lost, list(reversed(queue))
+    # The pool terminates (SIGTERM) the others when one dies: that one's code comes first.
+    exits = sorted((p.exitcode for p in processes.values() if p.exitcode),
+                   key=lambda code: code == -signal.SIGTERM)
+    return lost, list(reversed(queue)), exits
 
 
 def _submit(pool, spec):
@@ -230,31 +288,100 @@ def _stop(pool):
         p.join(5)
 
 
+#: Seconds the Ray cluster may not answer before its connection counts as lost (Ray's
+#: own driver waits 60 s and then aborts with a core dump's worth of log).
+CLUSTER_TIMEOUT = 10.0
+
+
+class ClusterLost(ConnectionError):
+    """The Ray cluster stopped answering; the runs written before stay on disk. The
+    process should end with os._exit (exit_now): Ray's own exit would wait on the lost
+    cluster, then crash."""
+    exit_now = True
+
+
 def _run_ray(specs, workers, done):
+    """Runs specs as Ray tasks. A run that raises is recorded as with the local pool; a
+    task whose worker dies is tried once more (max_retries=1, as the local pool runs a
+    lost run again) and then recorded as WorkerDied. A cluster that stops answering
+    for CLUSTER_TIMEOUT seconds raises ClusterLost: the runs written so far stay on disk,
+    the others are unfinished and the same command resumes them."""
     try:
         import ray
+        import ray.exceptions
     except ImportError:
         raise SystemExit("error: --backend ray needs Ray: pip install -e '.[ray]'") from None
     started_here = not ray.is_initialized()
     if started_here:
         address = os.environ.get("RAY_ADDRESS") or None
+        # The test-only hooks travel to workers that a cluster started elsewhere runs.
+        env = dict(_SINGLE_THREAD, **{k: os.environ[k] for k in (TEST_FAIL, TEST_CRASH)
+                                      if os.environ.get(k)})
         kwargs = {"address": address, "include_dashboard": False, "log_to_driver": False,
-                  "runtime_env": {"env_vars": _SINGLE_THREAD}}
+                  "logging_level": logging.WARNING, "runtime_env": {"env_vars": env}}
         if address is None:
             kwargs["num_cpus"] = workers or os.cpu_count() or 1
         ray.init(**kwargs)
     try:
-        remote = ray.remote(num_cpus=1)(_execute)
+        gcs = ray.get_runtime_context().gcs_address
+    except Exception:  # a Ray Client connection (ray://): its own errors tell a loss
+        gcs = None
+    died = (ray.exceptions.WorkerCrashedError, ray.exceptions.OutOfMemoryError,
+            ray.exceptions.NodeDiedError)
+    written, lost = 0, False
+
+    def check(silent_since):
+        """Raises ClusterLost once the cluster has not answered since silent_since for
+        CLUSTER_TIMEOUT seconds; returns when it last answered (now, if it does)."""
+        nonlocal lost
+        if _answers(gcs):
+            return time.monotonic()
+        if time.monotonic() - silent_since < CLUSTER_TIMEOUT:
+            return silent_since
+        lost = True
+        raise ClusterLost(f"lost the connection to the Ray cluster at {gcs} (no answer for "
+                          f"{CLUSTER_TIMEOUT:.0f} s); the {written} runs written are on disk; "
+                          "rerun the same command when the cluster is back")
+
+    try:
+        remote = ray.remote(num_cpus=1, max_retries=1)(_execute)
         refs = {remote.remote(s): s for s in specs}
-        waiting = list(refs)
+        waiting, answered = list(refs), time.monotonic()
         while waiting:
-            ready, waiting = ray.wait(waiting, num_returns=1)
+            ready, waiting = ray.wait(waiting, num_returns=1, timeout=1.0)
+            if not ready:
+                answered = check(answered)
+                continue
+            spec = refs[ready[0]]
             try:
                 result = ray.get(ready[0])
-            except Exception as e:  # a RayTaskError: the worker's traceback, its error as .cause
-                done(refs[ready[0]], error=e)
+            except ray.exceptions.RayTaskError as e:  # the run raised: its error as .cause
+                done(spec, error=e)
+            except died + (ray.exceptions.RayError,) as e:
+                # A worker that died, unless the whole cluster went with it.
+                while not _answers(gcs):
+                    answered = check(answered)
+                    time.sleep(0.5)
+                if not isinstance(e, died):
+                    raise
+                done(spec, error=WorkerDied(f"the Ray worker running {spec.name} died "
+                                            f"({results.error_line(e, 200)})"))
             else:
-                done(refs[ready[0]], result)
+                done(spec, result)
+            written += 1
     finally:
-        if started_here:
+        if started_here and not lost:  # ray.shutdown would wait on a lost cluster
             ray.shutdown()
+
+
+def _answers(address, timeout=2.0):
+    """Whether something accepts a connection at address ("host:port"; None: assumed)."""
+    import socket
+    if not address:
+        return True
+    host, _, port = address.rpartition(":")
+    try:
+        socket.create_connection((host, int(port)), timeout=timeout).close()
+    except (OSError, ValueError):
+        return False
+    return True

@@ -158,7 +158,7 @@ def _snapshot(folder):
 def _run(args, cwd):
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(
         [str(ROOT)] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]))
-    for name in ("EBRL_TEST_FAIL", "EBRL_TEST_CRASH"):
+    for name in ("EBRL_TEST_FAIL", "EBRL_TEST_CRASH", "EBRL_TEST_DISK_FULL"):
         env.pop(name, None)
     before = _snapshot(cwd)
     started = time.perf_counter()
