@@ -205,23 +205,22 @@ def validate_best(problem, trial_params, out, seeds, workers=None, backend="loca
 
 # -- the report -------------------------------------------------------------------
 def importances(s, names):
-    """{target: {reading: importance}} for the objective and each figure (fANOVA,
-    seeded), over the complete trials; {} with fewer than 10 of them."""
+    """{target: {reading: importance}} over the complete trials, for the objective and
+    for each figure's term (its squared scaled log ratio to the paper's): PED-ANOVA
+    (Optuna's PedAnovaImportanceEvaluator: how much each reading's distribution in the
+    best tenth of the trials differs from its distribution in all of them; deterministic,
+    no other package). {} with fewer than 10 complete trials."""
     import optuna
     done = s.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,))
     if len(done) < 10:
         return {}
-    keys = list(done[0].user_attrs["rungs"][0]["figures"])
-    out = {}
-    evaluator = lambda: optuna.importance.FanovaImportanceEvaluator(seed=0)  # noqa: E731
-    out["objective"] = optuna.importance.get_param_importances(s, evaluator=evaluator(),
-                                                               params=list(names))
-    for key in keys:
-        def target(t, key=key):
-            v = t.user_attrs["rungs"][0]["figures"].get(key)
-            return math.log(v) if v else math.log(1e6)
-        out[key] = optuna.importance.get_param_importances(s, evaluator=evaluator(),
-                                                           params=list(names), target=target)
+    evaluator = optuna.importance.PedAnovaImportanceEvaluator
+    out = {"objective": optuna.importance.get_param_importances(
+        s, evaluator=evaluator(), params=list(names), normalize=True)}
+    for key in done[0].user_attrs["rungs"][0]["terms"]:
+        out[key] = optuna.importance.get_param_importances(
+            s, evaluator=evaluator(), params=list(names), normalize=True,
+            target=lambda t, key=key: t.user_attrs["rungs"][0]["terms"][key])
     return out
 
 
@@ -293,12 +292,23 @@ def tables(s, out, names):
     imp = importances(s, names)
     if imp:
         targets = list(imp)
-        lines += ["", "Importance of each reading (fANOVA over the complete trials; the "
-                  "objective, then the log of each first-rung figure):", "",
+        lines += ["", "Importance of each reading (PED-ANOVA over the complete trials, "
+                  "normalised per column; the objective, then each figure's term, the "
+                  "distance of that figure to the paper's):", "",
                   "| reading | " + " | ".join(t.replace("/", " ").replace("_", " ") for t in targets) + " |",
                   "|---|" + "---:|" * len(targets)]
+        from tasks.robots import resolve
+
+        def cell(target, n):  # a floating reading cannot move a two-wheel figure
+            if target != "objective" and BY_NAME[n].scope == "floating" and \
+                    resolve(target.split("/")[0]).drive != "floating":
+                return "-"
+            return f"{imp[target].get(n, 0):.2f}"
         for n in names:
-            lines.append(f"| {n} | " + " | ".join(f"{imp[t].get(n, 0):.2f}" for t in targets) + " |")
+            lines.append(f"| {n} | " + " | ".join(cell(t, n) for t in targets) + " |")
+        lines += ["", "A figure that no reading moves (the two-wheel random walk's first trial: "
+                  "no learner acts before its first reward) shows equal importances; a "
+                  "reading's importance for a figure it cannot move is shown as '-'."]
     vpath = pathlib.Path(out) / "validation.json"
     if vpath.exists():
         v = json.loads(vpath.read_text())
