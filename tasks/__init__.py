@@ -4,16 +4,15 @@
 robot file with `drive="two_wheel"` or `drive="floating"`.
 """
 import dataclasses
-import gc
 
-import models  # first: it picks the headless OpenGL backend before dm_control loads
+import models  # first: it imports MuJoCo and dm_control with rendering off (tasks.render)
 
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 from dm_control.mujoco import wrapper  # noqa: E402
 from dm_control.rl import control  # noqa: E402
 
-from tasks import floating, navigation, two_wheel  # noqa: E402
+from tasks import floating, navigation, render, two_wheel  # noqa: E402
 from tasks.config import TaskConfig  # noqa: E402
 from tasks.robots import DRIVES, PAPER_ROBOTS, ROBOTS, Robot, resolve  # noqa: E402
 
@@ -31,15 +30,13 @@ _DRIVES = {
 
 
 class Environment(control.Environment):
-    """dm_control's Environment whose close() frees the physics and its GL context, so
-    no renderer is left for the interpreter's exit to trip over."""
+    """dm_control's Environment whose close() frees the physics and its renderer's GL
+    context (tasks.render), so none is left for the interpreter's exit to trip over."""
 
     def close(self):
         physics, self._physics = getattr(self, "_physics", None), None
         if physics is not None:
-            # Cameras made by render() hold the GL context until collected; the context
-            # is freed only when none is left.
-            gc.collect()
+            render.release(physics)
             physics.free()
 
 
