@@ -401,6 +401,8 @@ def _render_variants(args):
     """(label, condition, --set pairs) of the run to render, or of the two to compare."""
     pairs = list(args.set)
     if args.compare is not None and args.compare[0] == "condition":
+        if args.condition is not None:
+            raise ValueError("--compare condition runs both conditions: drop --condition")
         return [(c, c, pairs) for c in args.compare[1]]
     if args.condition is None:
         raise ValueError("--condition is required (unless --compare condition)")
