@@ -38,7 +38,12 @@ from ebrl.config import Config, reading_code
 from ebrl.kernels import eq1, eq5
 from ebrl.similarity import modalities
 
-__all__ = ["Agent", "eq1", "eq5"]
+__all__ = ["Agent", "DECIDERS", "eq1", "eq5"]
+
+#: Who chose an action (Agent.decision): the memory (eq 5); the fallback's intrinsic
+#: behaviour or its random action (its `choice`, "fallback" for one without); or the
+#: exploration draw, which handed to the fallback a step the memory would have taken.
+DECIDERS = ("memory", "intrinsic", "random", "exploration")
 
 
 class Agent:
@@ -100,6 +105,8 @@ class Agent:
         self.used_memory = False
         self.memory_decisions = 0
         self.fallback_decisions = 0
+        #: Who chose the last act's action, one of DECIDERS (videos colour by it).
+        self.decision = None
 
     # -- read-outs -----------------------------------------------------------------
     @property
@@ -152,11 +159,14 @@ class Agent:
                 self._decided[element] = True
             self.used_memory = True
             self.memory_decisions += 1
+            self.decision = "memory"
         else:
             action = np.array(self.fallback(x if readings is None else readings, self.rng),
                               dtype=np.float64).reshape(self.action_dim)
             self.used_memory = False
             self.fallback_decisions += 1
+            self.decision = ("exploration" if element >= 0
+                             else getattr(self.fallback, "choice", "fallback"))
         self._obs, self._act = x, action
         return action
 

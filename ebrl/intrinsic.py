@@ -73,6 +73,8 @@ def random_action(rng, action_dim, sd=0.5):
 class RandomWalk:
     """The paper's condition without avoidance: the random action every time."""
 
+    choice = "random"  # who chose the last action (ebrl.agent.DECIDERS)
+
     def __init__(self, action_dim, sd=0.5):
         self.action_dim, self.sd = action_dim, sd
 
@@ -104,6 +106,7 @@ class Intrinsic:
         self.random_in_avoidance = check_reading("random_in_avoidance", random_in_avoidance)
         self._add = random_in_avoidance == "add"
         self.last = np.zeros(action_dim) if hold else None  # eq 9's "not changed"
+        self.choice = None  # who chose the last action: "intrinsic" or "random"
 
     def _avoid(self, readings):
         if self.last is None:
@@ -112,10 +115,12 @@ class Intrinsic:
 
     def __call__(self, readings, rng):
         if rng.random() < self.random_rate:
+            self.choice = "random"
             action = random_action(rng, self.action_dim, self.sd)
             if self._add:
                 action = _clip(self._avoid(readings) + action)
         else:
+            self.choice = "intrinsic"
             action = self._avoid(readings)
         if self.last is not None:
             self.last = action.copy()

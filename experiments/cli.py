@@ -114,6 +114,24 @@ def _override(text):
     return name, _argument(lambda v: validate.number(kinds[name], name, v))(value)
 
 
+def _comparison(text):
+    """--compare: "condition" (random, then avoidance) or NAME=A,B (--set NAME=A, then
+    NAME=B) -> (name, (a, b))."""
+    if text == "condition":
+        return "condition", paper.CONDITIONS
+    name, sep, values = text.partition("=")
+    kinds = validate.setting_kinds()
+    parts = values.split(",")
+    if not sep or name not in kinds or len(parts) != 2:
+        raise argparse.ArgumentTypeError(
+            f"bad --compare {text!r}; use condition, or NAME=A,B with NAME one of "
+            + ", ".join(kinds))
+    a, b = (_argument(lambda v: validate.number(kinds[name], name, v))(p) for p in parts)
+    if a == b:
+        raise argparse.ArgumentTypeError(f"--compare {text!r} compares a value with itself")
+    return name, (a, b)
+
+
 def build_parser():
     from experiments.protocol import AGENTS
     p = _Parser(prog="ebrl", description=__doc__)
@@ -146,14 +164,29 @@ def build_parser():
                           "copy the figures to --figures and summary.json beside it")
     rep.add_argument("--figures", type=pathlib.Path, default=pathlib.Path("docs/figures"))
 
-    v = sub.add_parser("render", help="an offscreen MP4 of one run")
+    from experiments.rendering import PATH_STYLES
+    v = sub.add_parser("render", help="an offscreen MP4 of one run, or of two side by side")
     _robot_args(v, None, several=False)
     v.add_argument("--camera", default="top",
-                   help="top (default), perspective, or a camera of the robot's file")
-    v.add_argument("--condition", type=_choice(paper.CONDITIONS), required=True)
+                   help="top (default), perspective, follow (a perspective camera that "
+                        "tracks the robot), or a camera of the robot's file (chase)")
+    v.add_argument("--condition", type=_choice(paper.CONDITIONS), default=None,
+                   help="required, unless --compare condition")
     v.add_argument("--seed", type=_argument(lambda t: validate.integer(t, 0, validate.MAX_SEED)),
                    required=True)
     v.add_argument("--steps", type=_up_to(validate.MAX_STEPS), default=3000)
+    v.add_argument("--set", type=_override, action="append", default=[], metavar="NAME=VALUE",
+                   help="change a parameter of the agent or the task, as ebrl run does")
+    v.add_argument("--compare", type=_comparison, default=None, metavar="condition|NAME=A,B",
+                   help="two runs side by side, the same seed and the same steps: random "
+                        "and avoidance, or --set NAME=A and NAME=B")
+    v.add_argument("--beams", action=argparse.BooleanOptionalAction, default=True,
+                   help="each rangefinder beam to what it hits, shaded by its reading")
+    v.add_argument("--path", type=_choice(PATH_STYLES), default=PATH_STYLES[0],
+                   help="the trial's path coloured by who chose each step, with a legend "
+                        "(decider, the default), in one colour (plain), or none")
+    v.add_argument("--caption", action=argparse.BooleanOptionalAction, default=True,
+                   help="a line of text: step, trial, goals, who chose the action")
     v.add_argument("--out", type=pathlib.Path, required=True)
 
     b = sub.add_parser("bench", help="microseconds per agent step, by part")
@@ -365,22 +398,49 @@ def cmd_report(args):
     return 0
 
 
+def _render_variants(args):
+    """(label, condition, --set pairs) of the run to render, or of the two to compare."""
+    pairs = list(args.set)
+    if args.compare is not None and args.compare[0] == "condition":
+        if args.condition is not None:
+            raise ValueError("--compare condition runs both conditions: drop --condition")
+        return [(c, c, pairs) for c in args.compare[1]]
+    if args.condition is None:
+        raise ValueError("--condition is required (unless --compare condition)")
+    if args.compare is None:
+        return [(args.condition, args.condition, pairs)]
+    name, values = args.compare
+    if name in dict(pairs):
+        raise ValueError(f"--compare {name} is also given with --set")
+    return [(f"{name}={v}", args.condition, pairs + [(name, v)]) for v in values]
+
+
 def cmd_render(args):
     try:
         validate.output_file(args.out, "--out", suffix=".mp4")
         _check_robots(args)
+        variants = _render_variants(args)
+        for _, _, pairs in variants:
+            _check_agent(args, pairs)
     except ValueError as e:
         return _fail(str(e))
     from experiments import protocol, rendering
-    spec = protocol.RunSpec(args.robot, args.condition, args.seed, args.steps,
-                            drive=args.drive)
+    specs = [protocol.RunSpec(args.robot, condition, args.seed, args.steps, tuple(sorted(pairs)),
+                              drive=args.drive) for _, condition, pairs in variants]
+    labels = [label for label, _, _ in variants]
     try:
         rendering.ensure_backend()
-        rendering.check_camera(spec, args.camera)
+        rendering.check_camera(specs[0], args.camera)
     except rendering.RenderingError as e:
         return _fail(str(e))
-    result = rendering.record(spec, args.out, camera=args.camera)
-    print(f"video: {args.out} ({len(result['trial_ends'])} goals in {args.steps} steps)")
+    options = dict(camera=args.camera, beams=args.beams, path_style=args.path,
+                   caption=args.caption)
+    if len(specs) == 1:
+        results = [rendering.record(specs[0], args.out, label=labels[0], **options)]
+    else:
+        results = rendering.record_compare(specs, labels, args.out, **options)
+    goals = ", ".join(f"{len(r['trial_ends'])} goals ({label})" for r, label in zip(results, labels))
+    print(f"video: {args.out} ({goals} in {args.steps} steps)")
     return 0
 
 

@@ -146,7 +146,8 @@ def make_agent(spec, env):
 
 @functools.cache
 def _reading_scale():
-    # Imported here, not at the top: tasks sets MUJOCO_GL, which rendering picks first.
+    # Imported here, not at the top: importing tasks loads MuJoCo and dm_control, which
+    # the command line's checks do without.
     from tasks.navigation import SENSOR_LEVELS
     return 1.0 / SENSOR_LEVELS
 
@@ -175,8 +176,8 @@ def agent_input(observation, keys=("range",)):
 def execute(spec, on_step=None):
     """Runs one spec to its budget and returns its trials, trace and metrics.
 
-    on_step(step, env, trace, trial_begin, trial_start), if given, is called after
-    every step (videos use it).
+    on_step(step, env, trace, trial_begin, trial_start, agent), if given, is called after
+    every step (videos use it; agent.decision says who chose the step's action).
     """
     import tasks
 
@@ -203,7 +204,8 @@ def execute(spec, on_step=None):
             ts = env.reset()
             starts.append(pose()[:2])
         if on_step is not None:
-            on_step(step, env, trace, (trial_ends[-1] + 1) if trial_ends else 0, starts[-1])
+            on_step(step, env, trace, (trial_ends[-1] + 1) if trial_ends else 0, starts[-1],
+                    agent)
     seconds = time.perf_counter() - started
     env.close()
     return {

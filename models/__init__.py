@@ -10,27 +10,44 @@ Contact bits, one per role (contype / conaffinity):
   walls and obstacles 1 / 1; robot bumpers 2 / 1 (they touch walls, never the floor);
   the floor 4 / 0; wheels, casters and skids 0 / 4 (they touch the floor, nothing else).
 """
-import ctypes.util
+import contextlib
 import os
 import pathlib
+import sys
 
 import numpy as np
 
 
-def _default_gl_backend():
-    """An OpenGL backend that imports here without a display: egl, osmesa or none."""
-    if ctypes.util.find_library("EGL"):
-        return "egl"
-    if ctypes.util.find_library("OSMesa"):
-        return "osmesa"
-    return "disabled"
+@contextlib.contextmanager
+def _rendering_off():
+    """MUJOCO_GL=disabled for the duration, then as it was.
+
+    MuJoCo's Python package and dm_control load the OpenGL library that MUJOCO_GL names
+    when they are imported (EGL through Mesa brings its own LLVM, which crashes a process
+    that later loads torch's). They are imported here with rendering off, so a process
+    that never renders never loads an OpenGL library; tasks.render makes a context at the
+    first frame instead, with the backend MUJOCO_GL names then (or one it finds). A value
+    this package does not render with (glfw on a display, say) is left to them."""
+    wanted = os.environ.get("MUJOCO_GL")
+    if wanted not in (None, "", "egl", "osmesa"):
+        yield
+        return
+    os.environ["MUJOCO_GL"] = "disabled"
+    try:
+        yield
+    finally:
+        if wanted is None:
+            os.environ.pop("MUJOCO_GL", None)
+        else:
+            os.environ["MUJOCO_GL"] = wanted
 
 
-# dm_control picks its renderer at import and tries GLFW (a display) first; on a
-# headless machine choose before it is imported. An explicit MUJOCO_GL wins.
-os.environ.setdefault("MUJOCO_GL", _default_gl_backend())
+for _name in ("mujoco", "dm_control.mujoco"):  # each reads MUJOCO_GL once, at import
+    if _name not in sys.modules:
+        with _rendering_off():
+            __import__(_name)
 
-import mujoco  # noqa: E402  (after MUJOCO_GL is set)
+import mujoco  # noqa: E402
 
 #: Metres per paper unit. The only place where paper units meet SI units.
 UNIT = 0.1

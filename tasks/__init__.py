@@ -4,9 +4,8 @@
 robot file with `drive="two_wheel"` or `drive="floating"`.
 """
 import dataclasses
-import gc
 
-import models  # first: it picks the headless OpenGL backend before dm_control loads
+import models  # first: it imports MuJoCo and dm_control with rendering off (tasks.render)
 
 import dm_env  # noqa: E402
 import mujoco  # noqa: E402
@@ -14,7 +13,7 @@ import numpy as np  # noqa: E402
 from dm_control.mujoco import wrapper  # noqa: E402
 from dm_control.rl import control  # noqa: E402
 
-from tasks import floating, navigation, two_wheel  # noqa: E402
+from tasks import floating, navigation, render, two_wheel  # noqa: E402
 from tasks.config import TaskConfig  # noqa: E402
 from tasks.robots import DRIVES, PAPER_ROBOTS, ROBOTS, Robot, resolve  # noqa: E402
 
@@ -35,8 +34,8 @@ class Environment(control.Environment):
     """dm_control's Environment whose step() runs the task's compiled step where its
     drive has one (Navigation.compiled_step: the hooks' work in one compiled call,
     tests/test_tasks.py checks it equal to the hooks step for step), and whose close()
-    frees the physics and its GL context, so no renderer is left for the interpreter's
-    exit to trip over."""
+    frees the physics and its renderer's GL context (tasks.render), so none is left for
+    the interpreter's exit to trip over."""
 
     #: False runs dm_control's hooks one by one even where a compiled step exists.
     compiled = True
@@ -59,9 +58,7 @@ class Environment(control.Environment):
     def close(self):
         physics, self._physics = getattr(self, "_physics", None), None
         if physics is not None:
-            # Cameras made by render() hold the GL context until collected; the context
-            # is freed only when none is left.
-            gc.collect()
+            render.release(physics)
             physics.free()
 
 

@@ -5,7 +5,11 @@
     obs, info = env.reset(seed=0)
     obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
 
-`gymnasium.make("tasks.gym:EBRL/TwoWheel-v0")` imports this module itself. Options of
+An id is known in a process that imported this module. Gymnasium (1.0 on) no longer
+loads plugins at import, so a process that did not, a worker of a vector environment
+started with spawn or forkserver say, finds it through `"tasks.gym:EBRL/TwoWheel-v0"`:
+`gymnasium.make` imports the module before the id, and registering again is harmless.
+Options of
 `tasks.load` pass through: any field of tasks.TaskConfig (`sensor_noise`, `action_noise`,
 `start_jitter`, `bump`, ...); and `max_episode_steps` (default: the robot's budget of
 Section 3.6).
@@ -15,16 +19,27 @@ must reseed the task's own random stream (start jitter, sensor and action noise)
 reproduce a trajectory, and Shimmy's converter writes a wrong render_fps into the class
 metadata. Reaching the goal is `terminated`; the step limit (Gymnasium's TimeLimit) is
 `truncated`, never `terminated`.
+
+Spaces are float32, as Gymnasium's own MuJoCo environments: the action in [-1, 1] (the
+task takes it as float64), the range readings in [0, 255] (Section 3.2's codes). The
+floating drive's velocity (units/step) has no bound: its thrust changes it by up to 0.2
+units/step every step and nothing caps it (the floor is frictionless, there is no drag,
+and with bump="bounce" a wall takes no speed away), so no finite bound holds for every
+run. Rendering makes its OpenGL context at the first frame (tasks.render), so an
+environment that never renders loads no OpenGL library.
 """
 import gymnasium
 import numpy as np
 from gymnasium import spaces
 
+from tasks.navigation import SENSOR_LEVELS
 from tasks.robots import ROBOTS
 
 NAMESPACE = "EBRL"
 VERSION = 0
-RENDER_SIZE = (320, 480)  # height, width of render_mode="rgb_array"
+RENDER_SIZE = (480, 640)  # height, width of render_mode="rgb_array"
+#: The observations' bounds by key; a key not here is unbounded (see above).
+OBSERVATION_BOUNDS = {"range": (0.0, float(SENSOR_LEVELS))}
 
 
 def env_id(robot):
@@ -32,12 +47,16 @@ def env_id(robot):
     return f"{NAMESPACE}/{''.join(p.capitalize() for p in robot.split('_'))}-v{VERSION}"
 
 
-def _space(spec):
-    """A Box matching a dm_env spec (an Array is unbounded, a BoundedArray is bounded)."""
-    low = getattr(spec, "minimum", -np.inf)
-    high = getattr(spec, "maximum", np.inf)
-    return spaces.Box(np.broadcast_to(low, spec.shape).astype(spec.dtype),
-                      np.broadcast_to(high, spec.shape).astype(spec.dtype), spec.shape, spec.dtype)
+def _space(spec, bounds=None):
+    """A float32 Box of a dm_env spec's shape, bounded by `bounds` (low, high), else by the
+    spec's own (a BoundedArray), else unbounded."""
+    low, high = bounds or (getattr(spec, "minimum", -np.inf), getattr(spec, "maximum", np.inf))
+    return spaces.Box(np.broadcast_to(np.float32(low), spec.shape),
+                      np.broadcast_to(np.float32(high), spec.shape), spec.shape, np.float32)
+
+
+def _observation(observation):
+    return {k: np.asarray(v, dtype=np.float32) for k, v in observation.items()}
 
 
 class NavigationEnv(gymnasium.Env):
@@ -53,7 +72,8 @@ class NavigationEnv(gymnasium.Env):
         self._env = tasks.load(robot, drive=drive, seed=0, **task_fields)
         self.render_mode = render_mode
         self.observation_space = spaces.Dict(
-            {k: _space(s) for k, s in self._env.observation_spec().items()})
+            {k: _space(s, OBSERVATION_BOUNDS.get(k))
+             for k, s in self._env.observation_spec().items()})
         self.action_space = _space(self._env.action_spec())
         self._env.reset()
         self.metadata = dict(self.metadata,
@@ -72,12 +92,12 @@ class NavigationEnv(gymnasium.Env):
         if seed is not None:  # the task's own stream: start jitter, sensor and action noise
             self._env.task._random = np.random.RandomState(seed)
         ts = self._env.reset()
-        return dict(ts.observation), self._info()
+        return _observation(ts.observation), self._info()
 
     def step(self, action):
         ts = self._env.step(action)
         terminated = ts.last() and ts.discount == 0.0
-        return dict(ts.observation), float(ts.reward), terminated, False, self._info()
+        return _observation(ts.observation), float(ts.reward), terminated, False, self._info()
 
     def render(self):
         if self.render_mode != "rgb_array":

@@ -206,6 +206,14 @@ class Physics(dm_mujoco.Physics):
         return kernels.ranges(self._m, self._d, self._flags, self._sensordata, self._beam_span,
                               1.0 / UNIT, self.robot_radius)
 
+    def render(self, height=240, width=320, camera_id=-1, scene_option=None,
+               scene_callback=None):
+        """A frame, as dm_control's render, through tasks.render: the OpenGL context is
+        made at the first frame, never at import."""
+        from tasks import render
+        return render.frame(self, height, width, camera_id, scene_option=scene_option,
+                            scene_callback=scene_callback)
+
     def in_goal(self):
         """True when the robot's centre is inside the goal square."""
         x, y, _ = self.robot_pose()

@@ -113,6 +113,13 @@ CASES = [
     (RENDER + ["--seed", "0", "--out", "a_file/v.mp4"], "a_file is not a folder"),
     (RENDER + ["--seed", "0", "--out", "folder.mp4"], "is a folder"),
     (RENDER + ["--seed", "0", "--out", "/proc/v.mp4"], "cannot write"),
+    (RENDER + ["--seed", "0", "--compare", "bogus", "--out", "v.mp4"], "bad --compare"),
+    (RENDER + ["--seed", "0", "--compare", "bump=grip,grip", "--out", "v.mp4"], "itself"),
+    (RENDER + ["--seed", "0", "--compare", "bump=grip,stop", "--set", "bump=slide",
+               "--out", "v.mp4"], "also given with --set"),
+    (RENDER + ["--seed", "0", "--compare", "condition", "--out", "v.mp4"], "drop --condition"),
+    (["render", "--robot", "two_wheel", "--seed", "0", "--out", "v.mp4"], "--condition is required"),
+    (RENDER + ["--seed", "0", "--path", "dotted", "--out", "v.mp4"], "dotted"),
     # bench
     (["bench", "--steps", "0"], "positive"),
     (["bench", "--steps", "abc"], "not an integer"),

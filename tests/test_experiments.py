@@ -326,7 +326,7 @@ def test_sweep_table_takes_the_default_rows_from_a_baseline_run(clean_run, tmp_p
     assert not (tmp_path / "sweeps" / "policy_threshold_0.05" / "two_wheel" / "avoidance" / "seed_002").exists()
 
 
-@pytest.mark.parametrize("robot,camera", [("floating", "top"), ("diff_drive", "perspective"),
+@pytest.mark.parametrize("robot,camera", [("floating", "top"), ("diff_drive", "follow"),
                                           ("hovercraft", "chase")])
 def test_rendered_video_has_moving_frames(tmp_path, robot, camera):
     import imageio.v3 as iio
@@ -335,7 +335,7 @@ def test_rendered_video_has_moving_frames(tmp_path, robot, camera):
                 "--steps", "60", "--camera", camera, "--out", video)
     assert proc.stderr.strip() == ""
     frames = np.stack(list(iio.imiter(video)))
-    assert frames.shape[0] >= 30 and frames.shape[1:] == (320, 480, 3)
+    assert frames.shape[0] >= 30 and frames.shape[1:] == (480, 640, 3)
     assert np.abs(frames[-1].astype(int) - frames[0].astype(int)).mean() > 0.05
     bad = ebrl("render", "--robot", robot, "--condition", "avoidance", "--seed", "0",
                "--camera", "ceiling", "--out", tmp_path / "x.mp4", check=False)

@@ -81,3 +81,85 @@ def test_sync_vector_env_of_four_steps():
     assert reward.shape == terminated.shape == (4,)
     assert len({tuple(r) for r in obs["range"]}) == 4  # four seeds, four rooms of noise
     envs.close()
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_spaces_are_float32_and_bounded_where_a_bound_exists(env_id):
+    env = gymnasium.make(env_id)
+    assert env.action_space.dtype == np.float32
+    assert np.all(env.action_space.low == -1) and np.all(env.action_space.high == 1)
+    for key, space in env.observation_space.spaces.items():
+        assert space.dtype == np.float32, key
+    rng = env.observation_space["range"]
+    assert np.all(rng.low == 0) and np.all(rng.high == 255)
+    if "velocity" in env.observation_space.spaces:  # no finite bound: see tasks.gym
+        vel = env.observation_space["velocity"]
+        assert np.all(vel.low == -np.inf) and np.all(vel.high == np.inf)
+    obs, _ = env.reset(seed=0)
+    for _ in range(3):
+        assert all(v.dtype == np.float32 for v in obs.values())
+        assert obs in env.observation_space
+        obs, *_ = env.step(env.action_space.sample())
+    env.close()
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_async_vector_env_with_spawned_workers(env_id):
+    """Workers started with spawn (as SB3's SubprocVecEnv does) import nothing of ours
+    but what unpickling the environment's maker brings."""
+    envs = gymnasium.make_vec(env_id, num_envs=2, vectorization_mode="async",
+                              vector_kwargs={"context": "spawn"})
+    try:
+        obs, info = envs.reset(seed=0)
+        for _ in range(3):
+            obs, reward, terminated, truncated, info = envs.step(envs.action_space.sample())
+        assert obs["range"].shape[0] == 2 and obs["range"].dtype == np.float32
+        assert reward.shape == (2,) and info["pose"].shape == (2, 3)
+        assert not np.array_equal(info["pose"][0], info["pose"][1])  # two seeds, two paths
+    finally:
+        envs.close()
+
+
+_NO_GL = r"""
+import re
+import gymnasium
+
+def gl():
+    return sorted({line.split()[-1].rsplit("/", 1)[-1] for line in open("/proc/self/maps")
+                   if re.search(r"lib(EGL|OSMesa|GL)", line)})
+
+for env_id in IDS:  # the module's own form of the id: gymnasium imports tasks.gym first
+    env = gymnasium.make("tasks.gym:" + env_id)
+    env.reset(seed=0)
+    for _ in range(3):
+        env.step(env.action_space.sample())
+    env.close()
+print("before", gl())
+env = gymnasium.make("tasks.gym:EBRL/TwoWheel-v0", render_mode="rgb_array")
+env.reset(seed=0)
+assert env.render().std() > 0
+print("after", gl())
+env.close()
+"""
+
+
+@pytest.mark.parametrize("backend", [None, "egl"])
+def test_a_process_that_does_not_render_loads_no_opengl_library(backend):
+    """Not even with MUJOCO_GL=egl set; the first frame loads it."""
+    import ctypes.util
+    import os
+    import pathlib
+    import subprocess
+    import sys
+    if backend is not None and not ctypes.util.find_library("EGL"):
+        pytest.skip("libEGL is not installed")
+    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM")}
+    if backend is not None:
+        env["MUJOCO_GL"] = backend
+    proc = subprocess.run([sys.executable, "-c", f"IDS = {IDS!r}\n" + _NO_GL], env=env,
+                          cwd=pathlib.Path(__file__).resolve().parents[1], capture_output=True,
+                          text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    before, after = proc.stdout.splitlines()[-2:]
+    assert before == "before []", proc.stdout
+    assert "libEGL" in after or "libOSMesa" in after, proc.stdout
