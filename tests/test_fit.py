@@ -83,8 +83,9 @@ def test_the_objective_by_hand_on_a_changed_figure_and_a_failing_claim():
 
 
 def test_overrides_keep_agent_readings_for_both_robots_and_drop_defaults():
-    params = {"policy_threshold": 0.3, "bump": "stop", "initial_reliability": 0.5,
-              "radius": 2.0, "thrust": "scaled"}
+    params = {"policy_threshold": 0.3, "bump": "stop",
+              "initial_reliability": fit.default("initial_reliability"), "radius": 2.0,
+              "thrust": "scaled"}
     assert fit.overrides(params, "two_wheel") == (("policy_threshold", 0.3),)
     assert fit.overrides(params, "floating") == (("bump", "stop"), ("policy_threshold", 0.3),
                                                  ("radius", 2.0))
