@@ -130,25 +130,26 @@ class Accelerating:
 
     def __post_init__(self):
         wv = _turned(self.weights_h) if self.weights_v is None else self.weights_v
-        object.__setattr__(self, "_wv", np.asarray(wv, dtype=np.float64))
-        object.__setattr__(self, "_wh", np.asarray(self.weights_h, dtype=np.float64))
-
-    def _eq9(self, b, previous):
-        t = self.threshold
-        if b >= t:
-            return _clip1(self.gain * (b - t) / (1.0 - t))
-        if b <= -t:
-            return _clip1(self.gain * (b + t) / (1.0 - t))
-        return 0.0 if previous is None else self.hold * previous
+        object.__setattr__(self, "_w", np.array([self.weights_h, wv], dtype=np.float64))
+        object.__setattr__(self, "_k", self.gain / (1.0 - self.threshold))
 
     def avoid(self, readings, previous=None):
         """(a_h, a_v) for readings (scaled to [0, 1], E first, counter-clockwise);
         previous: the fallback's last acceleration (None: zero)."""
-        s = np.asarray(readings, dtype=np.float64)
-        b_h = float(np.dot(self._wh, s)) + self.bias[0]
-        b_v = float(np.dot(self._wv, s)) + self.bias[1]
-        p = (None, None) if previous is None else (float(previous[0]), float(previous[1]))
-        return np.array([self._eq9(b_h, p[0]), self._eq9(b_v, p[1])])
+        b = self._w.dot(np.asarray(readings, dtype=np.float64)).tolist()
+        t, k, hold, bias = self.threshold, self._k, self.hold, self.bias
+        out = [0.0, 0.0]
+        for i in (0, 1):
+            x = b[i] + bias[i]
+            if x >= t:
+                x = k * (x - t)     # gain (b - theta) / (1 - theta)
+            elif x <= -t:
+                x = k * (x + t)
+            else:
+                out[i] = 0.0 if previous is None else hold * float(previous[i])
+                continue
+            out[i] = -1.0 if x < -1.0 else (1.0 if x > 1.0 else x)
+        return np.array(out)
 
     def shape_fields(self):
         return ("weights_h", "weights_v", "bias", "threshold", "gain")
@@ -294,7 +295,7 @@ def from_dict(data):
             values[name] = _number(name, v)
     for name, (lo, hi) in _RANGES.items():
         if name in values and not lo <= values[name] <= hi:
-            raise GenomeError(f"field {name}: {values[name]} is outside [{lo}, {hi}]")
+            raise GenomeError(f"field {name}: {values[name]:g} is outside [{lo:g}, {hi:g}]")
     if values["random_sd"] <= 0:
         raise GenomeError(f"field random_sd: must be positive, got {values['random_sd']}")
     if "threshold" in values and not 0.0 <= values["threshold"] < 1.0:

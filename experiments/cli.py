@@ -654,6 +654,9 @@ def _evolve_args(args):
     from tasks.robots import resolve
     if args.population < 2:
         raise ValueError("--population must be at least 2 (CMA-ES keeps the better half)")
+    import importlib.util
+    if importlib.util.find_spec("cmaes") is None:
+        raise ValueError("ebrl evolve needs the cmaes package (Optuna's CMA-ES): pip install -e .")
     _check_robots(args)
     entry = resolve(args.robot, args.drive)
     if args.start is not None:
