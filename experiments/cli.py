@@ -686,6 +686,10 @@ def cmd_evolve(args):
         s = study.load(name, url, args.out, sampler=problem.sampler(0))
     except Exception as e:  # a storage that cannot be opened: one line
         return _fail(f"cannot open the study storage {url}: {results.error_line(e)}")
+    try:
+        evolve.check_settings(s, problem)
+    except ValueError as e:
+        return _fail(str(e))
     made, failed = 0, []
     try:
         if not s.get_trials(deepcopy=False):  # the starting genome first, alone

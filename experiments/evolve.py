@@ -166,6 +166,13 @@ class Problem:
                        "steps_per_trial": mean(per_trial), "first_trial_steps": mean(first),
                        "reached": len(first)}
 
+    def settings(self):
+        """What a study's trials depend on; a resumed study must have the same."""
+        return {"robot": self.robot, "drive": self.drive, "start": genomes.to_dict(self.start),
+                "space": list(self.names), "seeds": list(self.seeds), "steps": self.steps,
+                "learning": self.learning, "population": self.population,
+                "sampler_seed": self.sampler_seed}
+
     def sampler(self, n_trials):
         """CMA-ES for the batch starting at trial n_trials, seeded from the sampler seed
         and n_trials (so a resumed study samples as an unbroken one)."""
@@ -178,6 +185,20 @@ class Problem:
                 seed=(self.sampler_seed * 1_000_003 + n_trials) % 2**31,
                 popsize=self.population, n_startup_trials=1,
                 warn_independent_sampling=False)
+
+
+def check_settings(s, problem):
+    """Records the problem's settings in a new study; ValueError (one line) when a study
+    holding trials was made with other settings."""
+    want = json.loads(json.dumps(problem.settings()))
+    have = s.user_attrs.get("settings")
+    if have is None:
+        s.set_user_attr("settings", want)
+        return
+    diff = next((k for k in want if have.get(k) != want[k]), None)
+    if diff is not None:
+        raise ValueError(f"study {s.study_name} was made with other settings ({diff}: "
+                         f"{have.get(diff)!r}, now {want[diff]!r}); use another --study or --out")
 
 
 def generation(trial):

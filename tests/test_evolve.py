@@ -254,7 +254,7 @@ def _record(out):
     return [(t.number, t.state.name, t.params, t.value) for t in _study(out).trials]
 
 
-def test_a_tiny_evolution_runs_resumes_and_is_deterministic(tmp_path):
+def test_a_tiny_evolution_runs_resumes_and_is_deterministic(tmp_path, capsys):
     a, b, c = tmp_path / "a", tmp_path / "b", tmp_path / "c"
     proc = ebrl(*EVOLVE, "--generations", 1, "--out", a)
     assert proc.returncode == 0, proc.stderr
@@ -282,6 +282,11 @@ def test_a_tiny_evolution_runs_resumes_and_is_deterministic(tmp_path):
     # Again: nothing to do.
     proc = ebrl(*EVOLVE, "--generations", 2, "--out", a)
     assert proc.returncode == 0 and "0 trials made now, 9 in the study" in proc.stdout
+    # The same study with other seeds (or steps, population, start, space): refused.
+    before = (a / "study.db").read_bytes()
+    status, err = _main(capsys, [str(x) for x in EVOLVE[:5]] + ["--seeds", "1001", "--out", str(a)])
+    assert status == 2 and "made with other settings (seeds: [1000], now [1001])" in err
+    assert (a / "study.db").read_bytes() == before
 
     # A kill mid-generation leaves a trial running: the next call fails it and asks its
     # genome again first.
