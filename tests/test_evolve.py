@@ -31,7 +31,9 @@ def ebrl(*args):
 def test_paper_files_are_the_papers_rules_and_current():
     for name, path in PAPER_FILES.items():
         # Made by ebrl.behaviour.write_paper("behaviours"); rerun it if Config's defaults change.
-        assert path.read_text() == genomes.dumps(genomes.paper(name)), path
+        assert path.read_text() == genomes.dumps(genomes.paper(name)), (
+            f"{path} is stale: python -c 'from ebrl import behaviour; "
+            "behaviour.write_paper(\"behaviours\")'")
         g = genomes.load(path)
         assert g == genomes.paper(name) and genomes.is_paper_rule(g)
     t = genomes.load(PAPER_FILES["eq8"])
