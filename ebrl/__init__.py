@@ -37,6 +37,9 @@ eq 8      avoidance by turning        intrinsic.avoid_by_turning ("eq8")
           test_eq8_two_wheel_avoidance_by_hand
 eq 9-10   avoidance by accelerating   intrinsic.avoid_by_accelerating ("eq9-10")
           test_eq9_eq10_floating_avoidance_by_hand
+4         eq 8 and eq 9-10 as one     behaviour.Turning, behaviour.Accelerating (genomes,
+          point of two families       JSON; `ebrl run --behaviour`, `ebrl evolve`)
+                                      tests/test_evolve.py
 
 kernels.act and kernels.learn chain these for one step; ebrl.Agent holds the memory and
 calls them, once each per step.
@@ -74,7 +77,7 @@ tests/test_baselines.py; baselines.AGENTS names them): QTable, tabular Q-learnin
 roulette-wheel selection, whose confidence is the variance of its action probabilities;
 MFEC, model-free episodic control, trusted where its nearest neighbours are near.
 """
-from ebrl import baselines, intrinsic
+from ebrl import baselines, behaviour, intrinsic
 from ebrl.agent import Agent
 from ebrl.config import Config, paper_config
 from ebrl.similarity import similarity

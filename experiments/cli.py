@@ -1,5 +1,5 @@
 """The `ebrl` command (also `python -m experiments`): robots, run, report, render, bench,
-check, sweep, ablate, fit, demo.
+check, sweep, ablate, fit, evolve, demo.
 
 Exit status: 0 done; 1 some runs failed (each recorded in its run.json, named by the
 report, retried by a rerun); 2 a bad argument (one line, nothing written), or a results
@@ -155,6 +155,9 @@ def build_parser():
     r.add_argument("--out", type=pathlib.Path, default=pathlib.Path("results"))
     r.add_argument("--set", type=_override, action="append", default=[], metavar="NAME=VALUE",
                    help="change an agent parameter from Table 1's (for sweeps)")
+    r.add_argument("--behaviour", type=pathlib.Path, default=None, metavar="FILE",
+                   help="an intrinsic behaviour genome (JSON, ebrl.behaviour), e.g. "
+                        "behaviours/paper_eq8.json or one `ebrl evolve` saved")
     r.add_argument("--no-progress", action="store_true")
 
     rep = sub.add_parser("report", help="rebuild summary.json, REPORT.md and figures")
@@ -188,6 +191,8 @@ def build_parser():
     v.add_argument("--caption", action=argparse.BooleanOptionalAction, default=True,
                    help="a line of text: step, trial, goals, who chose the action")
     v.add_argument("--out", type=pathlib.Path, required=True)
+    v.add_argument("--behaviour", type=pathlib.Path, default=None, metavar="FILE",
+                   help="an intrinsic behaviour genome (JSON), as `ebrl run --behaviour`")
 
     b = sub.add_parser("bench", help="microseconds per agent step, by part")
     b.add_argument("--robot", type=robot_list, default=robot_list("all"),
@@ -272,6 +277,38 @@ def build_parser():
     f.add_argument("--figures", type=pathlib.Path, default=pathlib.Path("docs/figures"))
     f.add_argument("--no-progress", action="store_true")
 
+    e = sub.add_parser("evolve", help="CMA-ES over a robot's intrinsic behaviour, learning "
+                                      "or not (an Optuna study; resumable)")
+    _robot_args(e, None, several=False)
+    e.add_argument("--population", type=_up_to(MAX_POPULATION), default=8,
+                   help="trials per CMA-ES generation (default: %(default)s)")
+    e.add_argument("--generations", type=_up_to(MAX_TRIALS), default=30,
+                   help="generations the study should hold after the starting genome "
+                        "(default: %(default)s); the same command continues a study")
+    e.add_argument("--seeds", type=parse_seeds, default=list(range(1000, 1005)),
+                   help="training seeds (default: 1000-1004, outside the protocol's 0-49, "
+                        "which stay held out)")
+    e.add_argument("--steps", type=_up_to(validate.MAX_STEPS), default=None,
+                   help="agent steps per run (default: the robot's budget)")
+    e.add_argument("--no-learning", action="store_true",
+                   help="evolve the behaviour alone: the memory never acts")
+    e.add_argument("--start", type=pathlib.Path, default=None, metavar="FILE",
+                   help="the starting genome (default: the paper's rule for the robot)")
+    e.add_argument("--space", default="all",
+                   help="comma-separated genome fields to evolve (default: all; without "
+                        "learning, all but the learning variables)")
+    e.add_argument("--storage", default=None,
+                   help="an Optuna storage URL or an SQLite file (default: OUT/study.db)")
+    e.add_argument("--study", default=None,
+                   help="the study's name (default: evolve-ROBOT, evolve-ROBOT-controller "
+                        "with --no-learning)")
+    e.add_argument("--sampler-seed", type=_argument(lambda t: validate.integer(t, 0, 2**31 - 1)),
+                   default=0)
+    e.add_argument("--workers", type=_up_to(validate.MAX_WORKERS), default=os.cpu_count() or 1)
+    e.add_argument("--backend", type=_choice(("local", "ray")), default="local")
+    e.add_argument("--out", type=pathlib.Path, default=pathlib.Path("evolve"))
+    e.add_argument("--no-progress", action="store_true")
+
     d = sub.add_parser("demo", help="a quick protocol, its report and one video")
     d.add_argument("--out", type=pathlib.Path, default=pathlib.Path("demo_results"))
     d.add_argument("--workers", type=_up_to(validate.MAX_WORKERS), default=os.cpu_count() or 1)
@@ -302,6 +339,14 @@ def _check_agent(args, overrides):
         raise ValueError(f"--set {twice} is given more than once")
     validate.agent_configs(_selected_robots(args), overrides, args.drive,
                            getattr(args, "agent", "ebrl"))
+
+
+def _check_behaviour(args, overrides=()):
+    """--behaviour FILE: the genome for the selected robots (None without it)."""
+    if args.behaviour is None:
+        return None
+    from experiments import evolve
+    return evolve.check_genome(args.behaviour, _selected_robots(args), args.drive, overrides)
 
 
 def _check_backend(backend):
@@ -361,10 +406,14 @@ def cmd_run(args):
         _check_robots(args)
         _check_agent(args, args.set)
         _check_backend(args.backend)
+        genome = _check_behaviour(args, args.set)
     except ValueError as e:
         return _fail(str(e))
     from experiments import results, runner
     specs = _plan(args, args.set)
+    if genome is not None:
+        import dataclasses
+        specs = [dataclasses.replace(s, behaviour=genome) for s in specs]
     try:
         ran = runner.run(specs, args.out, workers=args.workers, backend=args.backend,
                          progress=not args.no_progress)
@@ -422,11 +471,13 @@ def cmd_render(args):
         variants = _render_variants(args)
         for _, _, pairs in variants:
             _check_agent(args, pairs)
+        genome = _check_behaviour(args, args.set)
     except ValueError as e:
         return _fail(str(e))
     from experiments import protocol, rendering
     specs = [protocol.RunSpec(args.robot, condition, args.seed, args.steps, tuple(sorted(pairs)),
-                              drive=args.drive) for _, condition, pairs in variants]
+                              drive=args.drive, behaviour=genome)
+             for _, condition, pairs in variants]
     labels = [label for label, _, _ in variants]
     try:
         rendering.ensure_backend()
@@ -574,11 +625,29 @@ def cmd_ablate(args):
 
 
 MAX_TRIALS = 100_000
+MAX_POPULATION = 1_000
+
+
+def _storage_url(args):
+    """--storage as an Optuna URL (checked: a writable SQLite file's folder, or a URL)."""
+    from experiments import study
+    url = study.storage_url(args.storage, args.out)
+    if args.storage is None:
+        pass  # OUT/study.db: --out is checked by the caller
+    elif url.startswith("sqlite:///"):
+        validate.output_file(pathlib.Path(url[len("sqlite:///"):]), "--storage")
+    else:
+        import sqlalchemy.engine
+        try:
+            sqlalchemy.engine.make_url(url)
+        except Exception as e:  # sqlalchemy's ArgumentError: not a URL
+            raise ValueError(f"bad --storage {args.storage!r}: {e}") from None
+    return url
 
 
 def _fit_args(args):
     """Every `ebrl fit` argument checked before any work: (space names, storage URL)."""
-    from experiments import fit, study
+    from experiments import fit
     names = tuple(fit.BY_NAME) if args.space == "all" else \
         tuple(n.strip() for n in args.space.split(",") if n.strip())
     unknown = [n for n in names if n not in fit.BY_NAME]
@@ -597,17 +666,7 @@ def _fit_args(args):
         validate.output_file(args.results, "--results")
         validate.output_folder(args.figures, "--figures")
     _check_backend(args.backend)
-    url = study.storage_url(args.storage, args.out)
-    if args.storage is None:
-        pass  # OUT/study.db: --out is checked above
-    elif url.startswith("sqlite:///"):
-        validate.output_file(pathlib.Path(url[len("sqlite:///"):]), "--storage")
-    else:
-        import sqlalchemy.engine
-        try:
-            sqlalchemy.engine.make_url(url)
-        except Exception as e:  # sqlalchemy's ArgumentError: not a URL
-            raise ValueError(f"bad --storage {args.storage!r}: {e}") from None
+    url = _storage_url(args)
     return names, url
 
 
@@ -650,6 +709,68 @@ def cmd_fit(args):
     return _finish("fit", path, failed)
 
 
+def _evolve_args(args):
+    """Every `ebrl evolve` argument checked before any work: (problem, storage URL)."""
+    from ebrl import behaviour as genomes
+    from experiments import evolve
+    from tasks.robots import resolve
+    if args.population < 2:
+        raise ValueError("--population must be at least 2 (CMA-ES keeps the better half)")
+    import importlib.util
+    if importlib.util.find_spec("cmaes") is None:
+        raise ValueError("ebrl evolve needs the cmaes package (Optuna's CMA-ES): pip install -e .")
+    _check_robots(args)
+    entry = resolve(args.robot, args.drive)
+    if args.start is not None:
+        start = evolve.check_genome(args.start, (args.robot,), args.drive)
+    else:
+        start = genomes.paper(entry.avoidance, evolve.range_beams(entry))
+    names = evolve.fields(start, args.space, learning=not args.no_learning)
+    validate.output_folder(args.out, "--out")
+    _check_backend(args.backend)
+    url = _storage_url(args)
+    problem = evolve.Problem(args.robot, start, names, tuple(args.seeds), args.steps,
+                             learning=not args.no_learning, population=args.population,
+                             sampler_seed=args.sampler_seed, drive=args.drive)
+    return problem, url
+
+
+def cmd_evolve(args):
+    try:
+        problem, url = _evolve_args(args)
+    except ValueError as e:
+        return _fail(str(e))
+    from experiments import evolve, protocol, results, study
+    label = protocol.RunSpec(args.robot, "avoidance", 0, 1, drive=args.drive).label
+    name = args.study or evolve.study_name(label, not args.no_learning)
+    args.out.mkdir(parents=True, exist_ok=True)
+    try:
+        s = study.load(name, url, args.out, sampler=problem.sampler(0))
+    except Exception as e:  # a storage that cannot be opened: one line
+        return _fail(f"cannot open the study storage {url}: {results.error_line(e)}")
+    try:
+        evolve.check_settings(s, problem)
+    except ValueError as e:
+        return _fail(str(e))
+    made, failed = 0, []
+    try:
+        if not s.get_trials(deepcopy=False):  # the starting genome first, alone
+            s.enqueue_trial(problem.x0())
+        # The starting genome alone (CMA-ES needs a complete trial to know the space), then
+        # one batch of --population trials per generation.
+        for n_trials, batch in ((1, 1), (1 + args.population * args.generations, args.population)):
+            outcome = study.optimize(problem, s, args.out, n_trials, batch=batch,
+                                     workers=args.workers, backend=args.backend,
+                                     promote=1.0, progress=not args.no_progress)
+            made += outcome.made
+            failed += [(f"trial {n}", e) for n, e in outcome.failed]
+        path = evolve.write(s, args.out, problem)
+    except results.ResultsError as e:
+        return _fail(str(e))
+    print(f"{made} trials made now, {len(s.trials)} in the study {name} ({url})")
+    return _finish("evolve", path, failed)
+
+
 def cmd_demo(args):
     """A quick protocol: the paper's robots, 6 seeds at a fifth of their budgets (at least
     10,000 steps), then the report and one video."""
@@ -683,7 +804,7 @@ def main(argv=None):
         args = build_parser().parse_args(argv)
         return {"robots": cmd_robots, "run": cmd_run, "report": cmd_report,
                 "render": cmd_render, "bench": cmd_bench, "check": cmd_check,
-                "sweep": cmd_sweep, "ablate": cmd_ablate, "fit": cmd_fit,
+                "sweep": cmd_sweep, "ablate": cmd_ablate, "fit": cmd_fit, "evolve": cmd_evolve,
                 "demo": cmd_demo}[args.command](args)
     except KeyboardInterrupt:
         print("ebrl: interrupted; finished runs are kept, rerun to resume", file=sys.stderr)

@@ -33,6 +33,9 @@ class RunSpec:
     drive: str = None
     #: The learner: "ebrl" (the paper's) or a baseline of ebrl.baselines ("qtable", "mfec").
     agent: str = "ebrl"
+    #: A genome of ebrl.behaviour (`ebrl run --behaviour FILE`): the fallback, its random
+    #: action and the learning variables' initial values; None: Section 3.4's rules.
+    behaviour: object = None
 
     @property
     def entry(self):
@@ -57,6 +60,9 @@ class RunSpec:
         config_cls, _ = agent_classes(self.agent)
         fields = {f.name for f in dataclasses.fields(config_cls)}
         mine = {k: v for k, v in self.overrides if k in fields}
+        if self.behaviour is not None:
+            from ebrl.behaviour import config_fields
+            mine.update({k: v for k, v in config_fields(self.behaviour).items() if k in fields})
         if self.agent == "ebrl":
             return ebrl.paper_config(self.entry.table1, **mine)
         return config_cls(**mine)
@@ -85,7 +91,12 @@ class RunSpec:
             "modalities": [list(m) for m in entry.modalities],
             "task": dataclasses.asdict(task),
             "model_sha256": model_digest(entry, task),
-        }
+        } | ({} if self.behaviour is None else {"behaviour": _genome_dict(self.behaviour)})
+
+
+def _genome_dict(genome):
+    from ebrl.behaviour import to_dict
+    return to_dict(genome)
 
 
 @functools.cache
@@ -136,9 +147,13 @@ def make_agent(spec, env):
     # baselines take fallback_for's defaults, which are EBRL's defaults).
     switches = {k: getattr(config, k) for k in ("eq9_dead_zone", "random_in_avoidance")
                 if hasattr(config, k)}
-    fallback = ebrl.intrinsic.fallback_for(entry.avoidance, spec.condition,
-                                           config.intrinsic_random_rate, config.random_sd,
-                                           **switches)
+    if spec.behaviour is not None:
+        switches.pop("eq9_dead_zone", None)  # the genome's hold decides
+        fallback = ebrl.behaviour.fallback(spec.behaviour, spec.condition, **switches)
+    else:
+        fallback = ebrl.intrinsic.fallback_for(entry.avoidance, spec.condition,
+                                               config.intrinsic_random_rate, config.random_sd,
+                                               **switches)
     _, agent_cls = agent_classes(spec.agent)
     return agent_cls(config, sum(sizes), env.action_spec().shape[0], fallback,
                      groups=groups, group_weights=weights, seed=agent_seed)

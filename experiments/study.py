@@ -18,6 +18,11 @@ repeated setting, a promotion's first seeds) is made once. Each trial records it
 its claims and its runs' folders as user attributes, so any other objective can be
 recomputed from the storage without running again.
 
+A problem may also give sampler(n): a fresh Optuna sampler for a batch that starts when
+the study holds n trials (`ebrl evolve`'s CMA-ES), so a study resumed at a batch's
+boundary samples as one that never stopped; without it the study keeps load()'s seeded
+TPE sampler (`ebrl fit`). A spec's genome (RunSpec.behaviour) is part of its folder key.
+
 Resume: the same command continues the study. Trials left running by a kill or Ctrl-C are
 marked failed and their settings asked again first, so their finished runs are reused. A
 trial whose runs failed is marked failed (not scored) with the errors in its attributes.
@@ -41,14 +46,18 @@ class Outcome:
     failed: list   # (trial number, first error) of trials failed now
 
 
-def folder_key(overrides):
-    """A run setting's folder name: a digest of its overrides (sorted pairs)."""
+def folder_key(overrides, behaviour=None):
+    """A run setting's folder name: a digest of its overrides (sorted pairs) and, when
+    it has one, its genome (ebrl.behaviour)."""
     text = json.dumps([list(kv) for kv in overrides], sort_keys=True)
+    if behaviour is not None:
+        from ebrl.behaviour import to_dict
+        text += json.dumps(to_dict(behaviour), sort_keys=True)
     return hashlib.sha256(text.encode()).hexdigest()[:12]
 
 
 def run_folder(out, spec):
-    return pathlib.Path(out) / "runs" / folder_key(spec.overrides)
+    return pathlib.Path(out) / "runs" / folder_key(spec.overrides, spec.behaviour)
 
 
 def storage_url(storage, out):
@@ -57,12 +66,14 @@ def storage_url(storage, out):
     return storage if "://" in storage else f"sqlite:///{pathlib.Path(storage).resolve()}"
 
 
-def load(name, storage, out, seed=0, create=True):
-    """The study `name` in the storage (made when missing and create), minimising."""
+def load(name, storage, out, seed=0, create=True, sampler=None):
+    """The study `name` in the storage (made when missing and create), minimising; with
+    the sampler given, else a seeded TPE sampler."""
     import optuna
     optuna.logging.set_verbosity(optuna.logging.WARNING)
-    sampler = optuna.samplers.TPESampler(seed=seed, multivariate=True, constant_liar=True,
-                                         n_startup_trials=20)
+    if sampler is None:
+        sampler = optuna.samplers.TPESampler(seed=seed, multivariate=True,
+                                             constant_liar=True, n_startup_trials=20)
     url = storage_url(storage, out)
     if not create:
         return optuna.load_study(study_name=name, storage=url, sampler=sampler)
@@ -124,6 +135,8 @@ def optimize(problem, study, out, n_trials, *, batch=4, workers=None, backend="l
     try:
         while len(_finished(study)) < n_trials:
             k = min(batch, n_trials - len(_finished(study)))
+            if hasattr(problem, "sampler"):
+                study.sampler = problem.sampler(len(study.get_trials(deepcopy=False)))
             trials = [study.ask(problem.distributions()) for _ in range(k)]
             rung_values = {t.number: [] for t in trials}
             alive = list(trials)
@@ -160,7 +173,7 @@ def optimize(problem, study, out, n_trials, *, batch=4, workers=None, backend="l
                 else:
                     rungs = rung_values[t.number]
                     t.set_user_attr("rungs", rungs)
-                    t.set_user_attr("folders", sorted({folder_key(s.overrides) for s in
+                    t.set_user_attr("folders", sorted({run_folder(out, s).name for s in
                                                        problem.specs(t.params, problem.rungs[0])}))
                     study.tell(t, rungs[0]["value"])
                 made += 1
