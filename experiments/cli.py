@@ -4,12 +4,14 @@ check, sweep, ablate, fit, evolve, demo.
 Exit status: 0 done; 1 some runs failed (each recorded in its run.json, named by the
 report, retried by a rerun); 2 a bad argument (one line, nothing written), or a results
 folder that cannot be written or a lost Ray cluster (one line; finished runs kept, the same
-command resumes); 130 Ctrl-C (finished runs kept; the same command resumes).
+command resumes); 130 Ctrl-C (finished runs kept; the same command resumes), SIGTERM likewise.
 """
 import argparse
 import os
 import pathlib
+import signal
 import sys
+import threading
 
 from experiments import paper, validate
 
@@ -799,7 +801,15 @@ def cmd_demo(args):
     return 0
 
 
+def _terminated(signum, frame):
+    """SIGTERM (a `kill`, a scheduler's stop) as Ctrl-C: the runner then stops its workers
+    instead of leaving them to finish their runs as orphans."""
+    raise KeyboardInterrupt
+
+
 def main(argv=None):
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, _terminated)
     try:
         args = build_parser().parse_args(argv)
         return {"robots": cmd_robots, "run": cmd_run, "report": cmd_report,

@@ -184,14 +184,20 @@ def test_kill_then_resume_gives_the_clean_summary(kill_clean, tmp_path, moment, 
     assert arrays(out) == arrays(kill_clean)
 
 
-def test_ctrl_c_stops_the_workers_in_one_line_and_the_command_resumes(kill_clean, tmp_path):
+@pytest.mark.parametrize("how", ["ctrl-c", "sigterm"])
+def test_ctrl_c_stops_the_workers_in_one_line_and_the_command_resumes(kill_clean, tmp_path, how):
+    """Ctrl-C at a terminal (SIGINT to the whole group), or SIGTERM to the command alone
+    (`kill PID`): the workers are stopped, none is left to finish its run as an orphan."""
     out = tmp_path / "interrupted"
     args = [*KILL_ARGS, "--workers", "2", "--out", out]
     proc = start_ebrl(*args)
     wait_for_runs(out, 1, proc)
     workers = {pid: cmd for pid, cmd in children(proc.pid).items() if b"spawn_main" in cmd}
     assert workers, "no spawn worker found"
-    os.killpg(proc.pid, signal.SIGINT)  # as Ctrl-C at a terminal: the whole group
+    if how == "ctrl-c":
+        os.killpg(proc.pid, signal.SIGINT)  # as Ctrl-C at a terminal: the whole group
+    else:
+        os.kill(proc.pid, signal.SIGTERM)
     _, err = proc.communicate(timeout=30)
     assert proc.returncode == 130, err
     assert len(err.strip().splitlines()) == 1 and "interrupted" in err, err
