@@ -238,10 +238,7 @@ def fitness_figure(s, path):
     ax.set_xlabel("generation (0: the starting genome)")
     ax.set_ylabel("mean goals over the training seeds")
     ax.legend(loc="lower right", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return report.save(fig, path, dpi=110)
 
 
 def best_genome(s, problem):

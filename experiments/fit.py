@@ -242,10 +242,7 @@ def objective_figure(s, path):
     ax.set_xlabel("trial")
     ax.set_ylabel("objective (lower is closer to the paper)")
     ax.legend(loc="upper right", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return report.save(fig, path, dpi=110)
 
 
 def _figure_rows(groups_by_name):

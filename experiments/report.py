@@ -133,6 +133,14 @@ def claims_table(summary):
 
 
 # -- figures ----------------------------------------------------------------------
+def save(fig, path, dpi=90):
+    """Lays out, writes and closes a figure; returns path."""
+    fig.tight_layout()
+    fig.savefig(path, dpi=dpi)
+    _plt().close(fig)
+    return path
+
+
 def _plt():
     import matplotlib
     matplotlib.use("Agg")
@@ -169,9 +177,7 @@ def cumulative_reward_figure(root, runs, robot, path):
     axes[2].set_xlabel("steps")
     axes[2].legend()
     fig.suptitle(f"{robot}: learning performance")
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+    save(fig, path)
 
 
 def typical_seed(runs, robot, condition):
@@ -205,9 +211,7 @@ def traces_figure(root, runs, robot, path):
         ax.set_title(f"{'without' if condition == 'random' else 'with'} avoidance, seed {seed}")
         ax.legend(loc="lower right", fontsize=7)
     fig.suptitle(f"{robot}: typical traces")
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+    save(fig, path)
 
 
 def first_vs_learned_figure(summary, path):
@@ -231,9 +235,7 @@ def first_vs_learned_figure(summary, path):
     ax.set_xticks(x, [f"{g['robot']}\n{g['condition']}" for g in groups])
     ax.set_ylabel("steps")
     ax.legend(fontsize=7, ncol=2)
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+    save(fig, path)
 
 
 BEGIN, END = "<!-- ebrl report: generated, do not edit -->", "<!-- ebrl report: end -->"
