@@ -165,12 +165,12 @@ CONFIG_FIELDS = {"random_rate": "intrinsic_random_rate", "random_sd": "random_sd
                  "initial_utility": "initial_utility"}
 
 
-def paper(behaviour, beams=None):
+def paper(behaviour, beams=None, config=None):
     """Section 3.4's rule as a genome: eq 8 for `beams` beams (7, the two-wheel robot's,
-    by default) or eq 9-10, with the paper's random share and spread and ebrl.Config's
-    defaults for what the paper leaves open (the learning variables' initial values and,
-    for eq 9-10, the dead zone's reading)."""
-    c = Config()
+    by default) or eq 9-10, with the paper's random share and spread and the config's
+    (ebrl.Config, its defaults when None) values for what the paper leaves open (the
+    learning variables' initial values and, for eq 9-10, the dead zone's reading)."""
+    c = Config() if config is None else config
     common = dict(random_rate=c.intrinsic_random_rate, random_sd=c.random_sd,
                   initial_reliability=float(c.initial_reliability),
                   initial_utility=float(c.initial_utility))
@@ -355,9 +355,3 @@ def with_flat(genome, values):
     return dataclasses.replace(genome, **changes)
 
 
-
-def write_paper(folder):
-    """The paper's rules as behaviour files, FOLDER/paper_<behaviour>.json (the shipped
-    behaviours/ folder is made so; tests/test_evolve.py checks it is current)."""
-    folder = pathlib.Path(folder)
-    return [save(paper(name), folder / f"paper_{name}.json") for name in FAMILIES]

@@ -20,7 +20,7 @@ from tasks.config import BUMPS
 @dataclasses.dataclass(frozen=True)
 class Reading:
     name: str              # a field of ebrl.Config or tasks.TaskConfig
-    values: tuple          # the default first
+    values: tuple          # the config field's default first (a robot's may be another)
     drives: tuple = ()     # the drives it concerns (all when empty)
     conditions: tuple = ()  # the conditions it concerns (all when empty)
     what: str = ""
@@ -55,10 +55,19 @@ def cell_name(changes):
 
 
 def cells(readings, combos):
-    """[(name, changes)] of the matrix: each non-default value of each reading alone,
-    then each combination."""
-    out = [(cell_name([(r.name, v)]), ((r.name, v),)) for r in readings for v in r.values[1:]]
+    """[(name, changes)] of the matrix: each value of each reading alone (a robot whose
+    default it is skips it: plan), then each combination."""
+    out = [(cell_name([(r.name, v)]), ((r.name, v),)) for r in readings for v in r.values]
     return out + [(cell_name(c), tuple(c)) for c in combos]
+
+
+def _is_default(changes, robot):
+    """Whether every change is already the robot's default (its readings, else the
+    config's field): such a cell is the default's cell for that robot."""
+    from tasks.robots import resolve
+    from experiments import validate
+    entry = resolve(robot)
+    return all(validate.setting_default(name, [entry]) == value for name, value in changes)
 
 
 def _concerns(changes, robot, condition):
@@ -77,7 +86,7 @@ def plan(robots, seeds, steps, readings, combos):
     out = {}
     for name, changes in cells(readings, combos):
         specs = [s for s in runner.plan(robots, paper.CONDITIONS, seeds, steps, changes)
-                 if _concerns(changes, s.robot, s.condition)]
+                 if _concerns(changes, s.robot, s.condition) and not _is_default(changes, s.robot)]
         if specs:
             out[name] = specs
     return out
@@ -137,6 +146,16 @@ def _row(cell, g):
             f"| {g['goals']['min']} / {report._fmt(g['goals']['median'], 1)} |")
 
 
+def _defaults(name):
+    """A reading's default, per paper robot where they differ: 'keep (floating), zero'."""
+    from tasks.robots import PAPER_ROBOTS, ROBOTS
+    from experiments import validate
+    values = {r: validate.setting_default(name, [ROBOTS[r]]) for r in PAPER_ROBOTS}
+    if len(set(map(str, values.values()))) == 1:
+        return next(iter(values.values()))
+    return ", ".join(f"{v} ({r})" for r, v in values.items())
+
+
 def tables(data):
     """The markdown of ABLATION.md's tables (also RESULTS.md's Ablation section)."""
     cells_ = data["cells"]
@@ -171,11 +190,12 @@ def write(out, data, failed=()):
     out = pathlib.Path(out)
     results.atomic_write(out / "ablation.json", results.dumps(data))
     lines = ["# Ablation of the paper's unwritten details", "",
-             "One reading changed at a time from the defaults (docs/interpretation.md), then "
+             "One reading changed at a time from each robot's defaults (its readings, "
+             "docs/interpretation.md), then "
              "the combinations named by --combo. A cell runs only the robots and conditions "
              "its readings touch; its other rows are the default's. 95% intervals are "
              "percentile bootstraps over seeds.", "", "Readings:", ""]
-    lines += [f"- `{r.name}`: {', '.join(map(str, r.values))} (default {r.values[0]}): {r.what}"
+    lines += [f"- `{r.name}`: {', '.join(map(str, r.values))} (default {_defaults(r.name)}): {r.what}"
               for r in READINGS]
     lines += ["", tables(data), ""]
     if failed:

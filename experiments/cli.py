@@ -399,6 +399,11 @@ def cmd_robots(args):
     for r in ROBOTS.values():
         print(f"{r.name:<12} {r.drive:<10} {r.table1:<8} {r.budget:>8,}  {r.avoidance:<9} "
               f"{r.description}")
+    print("\nReadings of what the paper leaves open (docs/interpretation.md; --set overrides):")
+    for r in ROBOTS.values():
+        text = ", ".join(f"{k}={v:.3g}" if isinstance(v, float) else f"{k}={v}"
+                         for k, v in r.readings)
+        print(f"{r.name:<12} {text or 'none: the config fields defaults'}")
     return 0
 
 
@@ -563,8 +568,13 @@ def cmd_sweep(args):
             if _report_if_any(folder, ran) is not None:
                 rows.append((v, results.load_runs(folder)))
         if baseline is not None:
-            default = validate.setting_default(args.param)
-            rows = sorted(rows + [(default, baseline)], key=lambda row: row[0])
+            from tasks.robots import resolve
+            default = validate.setting_default(
+                args.param, [resolve(r, args.drive) for r in _selected_robots(args)])
+            if default is None:  # the robots' defaults differ: the baseline first
+                rows = [("the robots' own", baseline)] + rows
+            else:
+                rows = sorted(rows + [(default, baseline)], key=lambda row: row[0])
             rows = [(f"{v} (default, {args.baseline})" if runs is baseline else v, runs)
                     for v, runs in rows]
         path = report.sweep_table(args.out, args.param, rows, failed) if rows else None
@@ -726,7 +736,7 @@ def _evolve_args(args):
     if args.start is not None:
         start = evolve.check_genome(args.start, (args.robot,), args.drive)
     else:
-        start = genomes.paper(entry.avoidance, evolve.range_beams(entry))
+        start = evolve.paper_genome(entry)
     names = evolve.fields(start, args.space, learning=not args.no_learning)
     validate.output_folder(args.out, "--out")
     _check_backend(args.backend)

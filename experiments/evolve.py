@@ -101,6 +101,32 @@ def check_genome(path, robots, drive=None, overrides=()):
     return genome
 
 
+def paper_genome(entry):
+    """The paper's rule for a robot's drive as a genome, with the robot's readings of the
+    learning variables and the dead zone (its agent config, protocol.RunSpec)."""
+    from experiments.protocol import RunSpec
+    from tasks.robots import ROBOTS
+    drive = None if entry.name in ROBOTS else entry.drive  # a robot file: its drive
+    config = RunSpec(entry.name, CONDITION, 0, 1, drive=drive).agent_config()
+    return genomes.paper(entry.avoidance, range_beams(entry), config)
+
+
+#: The paper's robots whose rules ship as behaviours/paper_<behaviour>.json.
+PAPER_FILE_ROBOTS = ("two_wheel", "floating")
+
+
+def write_paper(folder):
+    """The paper's rules, with the paper's robots' readings, as behaviour files,
+    FOLDER/paper_<behaviour>.json (the shipped behaviours/ folder is made so:
+    `python -c 'from experiments import evolve; evolve.write_paper("behaviours")'`;
+    tests/test_evolve.py checks it is current)."""
+    from tasks.robots import ROBOTS
+    folder = pathlib.Path(folder)
+    entries = [ROBOTS[r] for r in PAPER_FILE_ROBOTS]
+    return [genomes.save(paper_genome(e), folder / f"paper_{e.avoidance}.json")
+            for e in entries]
+
+
 def range_beams(entry):
     """The number of rangefinder beams of a robot (its task, loaded once)."""
     import tasks

@@ -79,11 +79,14 @@ SPACE = (
 BY_NAME = {p.name: p for p in SPACE}
 
 
-def default(name):
-    """The current default of a reading (validate.setting_default: the config's field;
-    the file's radius 1.5 and friction 1 where the field's default is None)."""
+def default(name, robot="floating"):
+    """A robot's current default of a reading (its readings, tasks.robots.Drive.readings,
+    else the config's field; the file's radius 1.5 and friction 1 where that is None).
+    The search's subject is the floating robot: its defaults are trial 0 and the text
+    of a trial's readings; a setting shared by both robots is run as given on each."""
     from experiments import validate
-    value = validate.setting_default(name)
+    from tasks.robots import resolve
+    value = validate.setting_default(name, [resolve(robot)])
     return {"radius": 1.5, "wall_friction": 1.0}.get(name, value) if value is None else value
 
 
@@ -93,7 +96,7 @@ def overrides(params, robot):
     from tasks.robots import resolve
     floating = resolve(robot).drive == "floating"
     chosen = {k: v for k, v in params.items()
-              if (BY_NAME[k].scope == "both" or floating) and v != default(k)}
+              if (BY_NAME[k].scope == "both" or floating) and v != default(k, robot)}
     return tuple(sorted(chosen.items()))
 
 

@@ -15,7 +15,7 @@ import numpy as np
 import ebrl
 
 #: Bump when a change alters what a run computes, so stale results are not reused.
-PROTOCOL_VERSION = 3  # 3: the compiled agent's float64 similarity; 2: f5fc609
+PROTOCOL_VERSION = 4  # 4: the adopted readings per drive, diff_drive's Euler; 3: float64 similarity
 #: Positions are stored as int16 hundredths of a unit.
 TRACE_SCALE = 100.0
 
@@ -56,10 +56,12 @@ class RunSpec:
 
     def agent_config(self):
         """EBRL: Table 1's column for the robot; a baseline: its config's defaults; with the
-        overrides that name the config's fields."""
+        robot's readings (tasks.robots.Drive.readings), then the overrides, that name the
+        config's fields."""
         config_cls, _ = agent_classes(self.agent)
         fields = {f.name for f in dataclasses.fields(config_cls)}
-        mine = {k: v for k, v in self.overrides if k in fields}
+        mine = {k: v for k, v in (self.entry.agent_readings() | dict(self.overrides)).items()
+                if k in fields}
         if self.behaviour is not None:
             from ebrl.behaviour import config_fields
             mine.update({k: v for k, v in config_fields(self.behaviour).items() if k in fields})
@@ -68,10 +70,11 @@ class RunSpec:
         return config_cls(**mine)
 
     def task_config(self):
-        """The paper's task, with the overrides that name task fields."""
+        """The paper's task with the robot's readings, then the overrides that name task
+        fields."""
         from tasks.config import TaskConfig
         fields = {f.name for f in dataclasses.fields(TaskConfig)}
-        return TaskConfig(**{k: v for k, v in self.overrides if k in fields})
+        return self.entry.task_config(**{k: v for k, v in self.overrides if k in fields})
 
     def parameters(self):
         """Everything that determines the run's result; a rerun matches on this."""

@@ -94,8 +94,13 @@ def setting_kinds():
     return kinds
 
 
-def setting_default(name):
-    """The default value of a --set name (EBRL's, a baseline's, or the task's)."""
+def setting_default(name, entries=()):
+    """The default value of a --set name (EBRL's, a baseline's, or the task's); with
+    robots' registry entries, theirs (their readings, tasks.robots.Drive.readings): one
+    value if they agree, else None."""
+    if entries:
+        values = {dict(e.readings).get(name, setting_default(name)) for e in entries}
+        return values.pop() if len(values) == 1 else None
     for cls in _setting_classes():
         if hasattr(cls(), name):
             return getattr(cls(), name)

@@ -77,9 +77,10 @@ def compile_robot(entry, config=TaskConfig()):
 def load(robot, *, drive=None, seed=None, config=None, **fields):
     """The navigation environment for `robot`: a name in tasks.ROBOTS, or a path to a
     robot file with drive "two_wheel" or "floating". config: a TaskConfig (default: the
-    paper's); fields: TaskConfig fields to change (sensor_noise=0.0, bump="slide", ...)."""
+    paper's with the robot's readings, Robot.task_config); fields: TaskConfig fields to
+    change (sensor_noise=0.0, bump="slide", ...)."""
     entry = robot if isinstance(robot, Robot) else resolve(robot, drive)
-    config = dataclasses.replace(config or TaskConfig(), **fields)
+    config = dataclasses.replace(config or entry.task_config(), **fields)
     task_cls, physics_classes, n_sub_steps, _ = _DRIVES[entry.drive]
     model, _ = compile_robot(entry, config)
     names = {mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, i)

@@ -26,13 +26,26 @@ class Drive:
     budget: int        # Section 3.6: agent steps of learning per run
     avoidance: str     # Section 3.4's intrinsic behaviour, by equation ("eq8", "eq9-10")
     modalities: tuple  # (observation key, eq 3 weight) pairs, in the agent's input order
+    #: This replication's readings of what the paper leaves open, where they differ from
+    #: the fields' defaults (ebrl.Config, tasks.TaskConfig), as (field, value) pairs: the
+    #: agent's and the drive's interface (its action noise, its velocity sensing).
+    #: docs/interpretation.md, "The adopted readings", gives the evidence.
+    readings: tuple = ()
 
 
 DRIVES = {
     "two_wheel": Drive("two_wheel", table1="T", budget=30_000, avoidance="eq8",
-                       modalities=(("range", 1.0),)),
+                       modalities=(("range", 1.0),),
+                       readings=(("initial_reliability", 0.5),)),
+    # `ebrl fit`'s trial 126 (study fit150, RESULTS.md "Search"), its values as searched.
     "floating": Drive("floating", table1="F", budget=100_000, avoidance="eq9-10",
-                      modalities=(("range", 0.7), ("velocity", 0.3))),
+                      modalities=(("range", 0.7), ("velocity", 0.3)),
+                      readings=(("policy_threshold", 0.47387881369719764),
+                                ("initial_reliability", 0.15582952700818442),
+                                ("eq9_dead_zone", "keep"), ("random_in_avoidance", "add"),
+                                ("action_noise", 0.37999421937185585),
+                                ("velocity_noise", 0.06931187891441754),
+                                ("velocity_code", "code"))),
 }
 
 
@@ -48,6 +61,8 @@ class Robot:
     budget: int = None
     avoidance: str = None
     modalities: tuple = None
+    #: (field, value) pairs on top of the drive's readings (Drive.readings): the body's.
+    readings: tuple = ()
     description: str = ""
 
     def __post_init__(self):
@@ -58,15 +73,36 @@ class Robot:
             if getattr(self, field) is None:
                 object.__setattr__(self, field, getattr(d, field))
         object.__setattr__(self, "model", pathlib.Path(self.model))
+        merged = dict(d.readings) | dict(self.readings)
+        object.__setattr__(self, "readings", tuple(sorted(merged.items())))
+
+    def task_config(self, **overrides):
+        """tasks.TaskConfig with this robot's task readings, then the overrides."""
+        from tasks.config import TaskConfig
+        return TaskConfig(**(self.task_readings() | overrides))
+
+    def task_readings(self):
+        """{TaskConfig field: value} of this robot's readings."""
+        from tasks.config import TaskConfig
+        fields = {f.name for f in dataclasses.fields(TaskConfig)}
+        return {k: v for k, v in self.readings if k in fields}
+
+    def agent_readings(self):
+        """{field: value} of this robot's readings that are not the task's (the agent's)."""
+        task = self.task_readings()
+        return {k: v for k, v in self.readings if k not in task}
 
 
 ROBOTS = {r.name: r for r in (
     Robot("two_wheel", MODEL_DIR / "two_wheel.xml", "two_wheel",
           description="the paper's two-wheel robot as a planar base (slide x, y, hinge yaw)"),
     Robot("floating", MODEL_DIR / "floating.xml", "floating",
+          # the body's readings from the search (trial 126): bouncing walls, a smaller puck
+          readings=(("bump", "bounce"), ("restitution", 0.5577716011437397),
+                    ("radius", 1.3859806771945204)),
           description="the paper's floating robot as a planar puck (slide x, y)"),
-    Robot("diff_drive", MODEL_DIR / "diff_drive.xml", "two_wheel", timestep=0.02,
-          integrator="implicitfast", time_scale=2.5,
+    Robot("diff_drive", MODEL_DIR / "diff_drive.xml", "two_wheel", timestep=0.025,
+          integrator="Euler", time_scale=2.5,
           description="a 3D differential-drive robot: free chassis, two wheels, casters"),
     Robot("hovercraft", MODEL_DIR / "hovercraft.xml", "floating", timestep=0.025,
           integrator="implicitfast",

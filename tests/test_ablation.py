@@ -15,14 +15,16 @@ def ebrl(*args):
 def test_a_task_setting_is_recorded_and_changes_the_run(tmp_path):
     base = ["run", "--robot", "floating", "--condition", "random", "--seeds", "0",
             "--steps", "400", "--workers", "1", "--no-progress"]
-    assert ebrl(*base, "--out", tmp_path / "grip").returncode == 0
-    proc = ebrl(*base, "--set", "bump=bounce", "--out", tmp_path / "bounce")
+    # The floating robot's bump reading is "bounce" (tasks.robots); --set changes it.
+    assert ebrl(*base, "--out", tmp_path / "bounce").returncode == 0
+    proc = ebrl(*base, "--set", "bump=grip", "--out", tmp_path / "grip")
     assert proc.returncode == 0, proc.stderr
-    run = tmp_path / "bounce" / "floating" / "random" / "seed_000"
+    run = tmp_path / "grip" / "floating" / "random" / "seed_000"
     config = json.loads((run / "config.json").read_text())
-    assert config["task"]["bump"] == "bounce" and config["task"]["sensor_range"] == 14.0
-    grip = (tmp_path / "grip" / "floating" / "random" / "seed_000" / "trace.npz").read_bytes()
-    assert (run / "trace.npz").read_bytes() != grip
+    assert config["task"]["bump"] == "grip" and config["task"]["sensor_range"] == 14.0
+    bounce = tmp_path / "bounce" / "floating" / "random" / "seed_000"
+    assert json.loads((bounce / "config.json").read_text())["task"]["bump"] == "bounce"
+    assert (run / "trace.npz").read_bytes() != (bounce / "trace.npz").read_bytes()
     bad = ebrl(*base, "--set", "bump=wobble", "--out", tmp_path / "bad")
     assert bad.returncode == 2 and "bump must be one of" in bad.stderr
     assert not (tmp_path / "bad").exists()
@@ -35,10 +37,13 @@ def test_ablate_runs_each_cell_where_it_applies_and_resumes(tmp_path):
     proc = ebrl(*args)
     assert proc.returncode == 0, proc.stderr
     cells = sorted(p.name for p in out.iterdir() if p.is_dir())
-    assert cells == sorted(["default", "bump=stop", "bump=slide", "bump=bounce", "radius=1.0",
-                            "radius=2.5", "bump=slide+radius=1.0"])
+    # bounce is the floating robot's own bump (no cell), radius=None (the file's 1.5) its
+    # other radius; a two-wheel robot's radius is its file's (no cell for it).
+    assert cells == sorted(["default", "bump=grip", "bump=stop", "bump=slide", "radius=None",
+                            "radius=1.0", "radius=2.5", "bump=slide+radius=1.0"])
     # bump concerns the floating drive only; radius every robot.
     assert [p.name for p in (out / "bump=stop").iterdir() if p.is_dir()] == ["floating"]
+    assert [p.name for p in (out / "radius=None").iterdir() if p.is_dir()] == ["floating"]
     assert sorted(p.name for p in (out / "radius=2.5").iterdir() if p.is_dir()) == \
         ["floating", "two_wheel"]
     data = json.loads((out / "ablation.json").read_text())

@@ -29,17 +29,24 @@ def ebrl(*args):
 
 # -- the family on hand-made readings ---------------------------------------------------
 def test_paper_files_are_the_papers_rules_and_current():
-    for name, path in PAPER_FILES.items():
-        # Made by ebrl.behaviour.write_paper("behaviours"); rerun it if Config's defaults change.
-        assert path.read_text() == genomes.dumps(genomes.paper(name)), (
-            f"{path} is stale: python -c 'from ebrl import behaviour; "
-            "behaviour.write_paper(\"behaviours\")'")
+    from tasks.robots import ROBOTS
+    for robot in evolve.PAPER_FILE_ROBOTS:
+        entry = ROBOTS[robot]
+        path = PAPER_FILES[entry.avoidance]
+        # Made by evolve.write_paper("behaviours"); rerun it if a robot's readings change.
+        expected = evolve.paper_genome(entry)
+        assert path.read_text() == genomes.dumps(expected), (
+            f"{path} is stale: python -c 'from experiments import evolve; "
+            "evolve.write_paper(\"behaviours\")'")
         g = genomes.load(path)
-        assert g == genomes.paper(name) and genomes.is_paper_rule(g)
+        assert g == expected and genomes.is_paper_rule(g)
+        config = protocol.RunSpec(robot, "avoidance", 0, 1).agent_config()
+        assert g.initial_reliability == config.initial_reliability
     t = genomes.load(PAPER_FILES["eq8"])
     assert t.weights == (1 / 6, 2 / 6, 3 / 6, 0.0, -3 / 6, -2 / 6, -1 / 6)  # i / sum(i), mirrored
     a = genomes.load(PAPER_FILES["eq9-10"])
-    assert (a.threshold, a.gain, a.hold, a.bias) == (0.25, 1.0, 0.0, (0.0, 0.0))
+    # eq 9's dead zone keeps the previous acceleration: the floating drive's reading.
+    assert (a.threshold, a.gain, a.hold, a.bias) == (0.25, 1.0, 1.0, (0.0, 0.0))
     assert (t.random_rate, t.random_sd) == (a.random_rate, a.random_sd) == (0.2, 0.5)
 
 
@@ -149,13 +156,15 @@ def test_the_paper_files_reproduce_the_default_runs_bit_for_bit(robot):
         assert mine["trace"].tobytes() == default["trace"].tobytes(), condition
         assert mine["trial_ends"].tolist() == default["trial_ends"].tolist()
         assert mine["memory_decisions"] == default["memory_decisions"]
-    if robot == "floating":  # hold 1 is the eq9_dead_zone reading "keep", bit for bit
-        keep = protocol.execute(protocol.RunSpec(robot, "avoidance", 3, STEPS,
-                                                 (("eq9_dead_zone", "keep"),)))
-        held = protocol.execute(protocol.RunSpec(robot, "avoidance", 3, STEPS,
-                                                 behaviour=dataclasses.replace(genome, hold=1.0)))
-        assert held["trace"].tobytes() == keep["trace"].tobytes()
-        assert held["trace"].tobytes() != default["trace"].tobytes()
+    if robot == "floating":  # the floating robot's reading "keep" is hold 1 (its file's);
+        # hold 0 is the reading "zero", bit for bit
+        assert genome.hold == 1.0
+        zero = protocol.execute(protocol.RunSpec(robot, "avoidance", 3, STEPS,
+                                                 (("eq9_dead_zone", "zero"),)))
+        dropped = protocol.execute(protocol.RunSpec(robot, "avoidance", 3, STEPS,
+                                                    behaviour=dataclasses.replace(genome, hold=0.0)))
+        assert dropped["trace"].tobytes() == zero["trace"].tobytes()
+        assert dropped["trace"].tobytes() != default["trace"].tobytes()
 
 
 def test_run_with_a_behaviour_file_records_it_and_matches_the_default(tmp_path):
@@ -263,13 +272,14 @@ def test_a_tiny_evolution_runs_resumes_and_is_deterministic(tmp_path, capsys):
     trials = _study(a).trials
     assert len(trials) == 5 and all(t.state.name == "COMPLETE" for t in trials)
     # Trial 0: the paper's rule, whose runs are the default's (folder key with the genome).
-    problem = evolve.Problem("two_wheel", genomes.paper("eq8"), evolve.fields(genomes.paper("eq8")),
-                             (1000,), 1500)
+    from tasks.robots import ROBOTS
+    start = evolve.paper_genome(ROBOTS["two_wheel"])   # with the two-wheel robot's readings
+    problem = evolve.Problem("two_wheel", start, evolve.fields(start), (1000,), 1500)
     assert trials[0].params == problem.x0()
     assert trials[0].user_attrs["rungs"][0]["goals"] == -trials[0].value
     spec = problem.specs(trials[0].params, (1000,))[0]
     config = json.loads((study.run_folder(a, spec) / spec.name / "config.json").read_text())
-    assert config["behaviour"] == genomes.to_dict(genomes.paper("eq8"))
+    assert config["behaviour"] == genomes.to_dict(start)
     assert len({t.params["gain"] for t in trials}) == 5          # generation 1 sampled apart
     best = genomes.load(a / "evolve-two_wheel_best.json")
     assert best.behaviour == "eq8" and (a / "evolve-two_wheel.md").exists()

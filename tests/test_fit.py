@@ -83,12 +83,20 @@ def test_the_objective_by_hand_on_a_changed_figure_and_a_failing_claim():
 
 
 def test_overrides_keep_agent_readings_for_both_robots_and_drop_defaults():
+    floating_reliability = fit.default("initial_reliability")        # the floating robot's
+    assert floating_reliability == fit.default("initial_reliability", "floating")
+    assert fit.default("initial_reliability", "two_wheel") == 0.5   # tasks.robots' drives
     params = {"policy_threshold": 0.3, "bump": "stop",
-              "initial_reliability": fit.default("initial_reliability"), "radius": 2.0,
+              "initial_reliability": floating_reliability, "radius": 2.0,
               "thrust": "scaled"}
-    assert fit.overrides(params, "two_wheel") == (("policy_threshold", 0.3),)
+    # A shared reading is run as given on each robot, left out where it is the robot's own.
+    assert fit.overrides(params, "two_wheel") == (("initial_reliability", floating_reliability),
+                                                  ("policy_threshold", 0.3))
     assert fit.overrides(params, "floating") == (("bump", "stop"), ("policy_threshold", 0.3),
                                                  ("radius", 2.0))
+    params["initial_reliability"] = 0.5
+    assert fit.overrides(params, "two_wheel") == (("policy_threshold", 0.3),)
+    assert ("initial_reliability", 0.5) in fit.overrides(params, "floating")
 
 
 def _trials(out):
@@ -107,8 +115,9 @@ def test_a_tiny_study_runs_resumes_and_reaches_the_runs(tmp_path):
     assert proc.returncode == 0, proc.stderr
     trials = _trials(out)
     assert [t.number for t in trials] == [0, 1] and all(t.state.name == "COMPLETE" for t in trials)
-    assert trials[0].params == {"policy_threshold": 0.0, "bump": "grip", "thrust": "scaled",
-                                "episode": "trial"}  # trial 0: the defaults
+    # trial 0: the defaults, the floating robot's (tasks.robots)
+    assert trials[0].params == {"policy_threshold": fit.default("policy_threshold", "floating"),
+                                "bump": "bounce", "thrust": "scaled", "episode": "trial"}
     figures = trials[1].user_attrs["rungs"][0]["figures"]
     assert set(figures) == {f"{r}/{c}/{f}" for r in fit.ROBOTS for c in paper.CONDITIONS
                             for f in fit.FIGURES}

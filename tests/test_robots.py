@@ -26,8 +26,11 @@ def ebrl(*args, cwd=ROOT):
 def test_every_command_takes_its_robots_from_the_registry():
     listed = ebrl("robots")
     assert listed.returncode == 0
-    names = [line.split()[0] for line in listed.stdout.splitlines()[1:]]
+    table, readings = listed.stdout.split("\n\n")
+    names = [line.split()[0] for line in table.splitlines()[1:]]
     assert names == list(tasks.ROBOTS) and {"diff_drive", "hovercraft"} <= set(names)
+    assert [line.split()[0] for line in readings.splitlines()[1:]] == names
+    assert "bump=bounce" in readings and "initial_reliability=0.5" in readings
     for command in (["run"], ["sweep"], ["bench"], ["check"],
                     ["render", "--condition", "random", "--seed", "0", "--out", "x.mp4"]):
         proc = ebrl(*command, "--robot", "tricycle")
@@ -81,8 +84,8 @@ def test_sensors_once_per_step_read_as_sensors_every_substep():
 
 def test_planar_trajectories_unchanged_by_the_registry():
     """The first 3,000 steps of seeds 0-1, every paper robot and condition, as the full
-    run behind RESULTS.md made them (tests/data/planar_traces_v<PROTOCOL_VERSION>.npz; the
-    registry, the 3D room and the compiled agent left these steps as protocol 2's). Bit
+    run behind RESULTS.md made them (tests/data/planar_traces_v<PROTOCOL_VERSION>.npz;
+    protocol 4's readings changed the floating runs and one two-wheel avoidance run). Bit
     for bit on one kind of machine: the file was remade on this project's current kind,
     where one run parts from the previous kind's by a hundredth of a unit at step 2,831
     (numpy's BLAS and math kernels round the last bit per CPU; same code, same seeds)."""
@@ -215,7 +218,8 @@ def test_room_layout_is_read_from_the_composed_model():
 
 
 def test_hovercraft_glides_and_a_bump_takes_most_of_its_speed_into_the_wall():
-    env = tasks.load("hovercraft", seed=0, start_jitter=False, sensor_noise=0.0, action_noise=0.0)
+    env = tasks.load("hovercraft", seed=0, config=tasks.TaskConfig(), start_jitter=False,
+                     sensor_noise=0.0, action_noise=0.0)
     env.reset()
     env.physics.set_robot_pose(40.0, 30.0)
     env.step([1.0, -0.5])
@@ -229,4 +233,32 @@ def test_hovercraft_glides_and_a_bump_takes_most_of_its_speed_into_the_wall():
         env.step([0.0, 0.0])
     vx, vy = env.physics.robot_velocity()
     assert 0.0 <= vy < 0.25 * 0.4 and abs(vx) < 1e-3
+    env.close()
+
+
+def test_a_drives_readings_reach_its_robots_runs_and_set_overrides_them():
+    """Protocol 4's readings (tasks.robots: a drive's, a robot's own on top) are each
+    run's config; --set (a spec's overrides) changes any of them."""
+    floating = dict(tasks.ROBOTS["floating"].readings)
+    spec = protocol.RunSpec("floating", "avoidance", 0, 10)
+    agent, task = spec.agent_config(), spec.task_config()
+    assert agent.policy_threshold == floating["policy_threshold"] > 0.4
+    assert (agent.eq9_dead_zone, agent.random_in_avoidance) == ("keep", "add")
+    assert (task.bump, task.radius, task.velocity_code) == ("bounce", floating["radius"], "code")
+    assert agent.memory_size == 4096 and task.sensor_noise == 0.05 * 255   # Table 1, 3.2
+    # The hovercraft shares the drive's readings, not the planar puck's body.
+    hover = protocol.RunSpec("hovercraft", "avoidance", 0, 10)
+    assert hover.agent_config() == agent
+    assert hover.task_config().action_noise == task.action_noise == floating["action_noise"]
+    assert (hover.task_config().bump, hover.task_config().radius) == ("grip", None)
+    # The two-wheel drive: its own reading, the paper's 5% action noise.
+    two = protocol.RunSpec("diff_drive", "random", 0, 10)
+    assert (two.agent_config().initial_reliability, two.agent_config().policy_threshold) == (0.5, 0.0)
+    assert two.task_config().action_noise == 0.05
+    over = protocol.RunSpec("floating", "avoidance", 0, 10,
+                            (("bump", "grip"), ("policy_threshold", 0.1)))
+    assert (over.task_config().bump, over.agent_config().policy_threshold) == ("grip", 0.1)
+    assert over.parameters()["task"]["bump"] == "grip"
+    env = tasks.load("floating", seed=0)
+    assert env.task.config.bump == "bounce"
     env.close()

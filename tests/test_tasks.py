@@ -73,7 +73,10 @@ def random_free_pose(rng):
 
 
 def quiet_env(robot, **kw):
-    return tasks.load(robot, sensor_noise=0.0, action_noise=0.0, start_jitter=False, **kw)
+    """The paper's base task (the config fields' defaults, not the robot's readings),
+    without noise or jitter."""
+    return tasks.load(robot, config=tasks.TaskConfig(), sensor_noise=0.0, action_noise=0.0,
+                      start_jitter=False, **kw)
 
 
 @pytest.mark.parametrize("robot,beams", [("two_wheel", TWO_WHEEL_BEAMS), ("floating", FLOATING_BEAMS)])
@@ -331,8 +334,8 @@ def test_compiled_sensing_equals_the_numpy_formula_bit_for_bit():
 
 
 def _bump(robot, bump, vx, vy):
-    env = tasks.load(robot, seed=0, start_jitter=False, sensor_noise=0.0, action_noise=0.0,
-                     bump=bump)
+    env = tasks.load(robot, seed=0, config=tasks.TaskConfig(), start_jitter=False,
+                     sensor_noise=0.0, action_noise=0.0, bump=bump)
     env.reset()
     env.physics.set_robot_pose(40.0, 3.0)  # 1.5 units above the south wall
     for _ in range(2):
