@@ -117,16 +117,18 @@ def _override(text):
 
 
 def _comparison(text):
-    """--compare: "condition" (random, then avoidance) or NAME=A,B (--set NAME=A, then
-    NAME=B) -> (name, (a, b))."""
+    """--compare: "condition" (random, then avoidance), "behaviour" (the paper's rule, then
+    --behaviour FILE) or NAME=A,B (--set NAME=A, then NAME=B) -> (name, (a, b))."""
     if text == "condition":
         return "condition", paper.CONDITIONS
+    if text == "behaviour":
+        return "behaviour", ("hand-coded", "evolved")
     name, sep, values = text.partition("=")
     kinds = validate.setting_kinds()
     parts = values.split(",")
     if not sep or name not in kinds or len(parts) != 2:
         raise argparse.ArgumentTypeError(
-            f"bad --compare {text!r}; use condition, or NAME=A,B with NAME one of "
+            f"bad --compare {text!r}; use condition, behaviour, or NAME=A,B with NAME one of "
             + ", ".join(kinds))
     a, b = (_argument(lambda v: validate.number(kinds[name], name, v))(p) for p in parts)
     if a == b:
@@ -182,7 +184,8 @@ def build_parser():
     v.add_argument("--steps", type=_up_to(validate.MAX_STEPS), default=3000)
     v.add_argument("--set", type=_override, action="append", default=[], metavar="NAME=VALUE",
                    help="change a parameter of the agent or the task, as ebrl run does")
-    v.add_argument("--compare", type=_comparison, default=None, metavar="condition|NAME=A,B",
+    v.add_argument("--compare", type=_comparison, default=None,
+                   metavar="condition|behaviour|NAME=A,B",
                    help="two runs side by side, the same seed and the same steps: random "
                         "and avoidance, or --set NAME=A and NAME=B")
     v.add_argument("--beams", action=argparse.BooleanOptionalAction, default=True,
@@ -310,6 +313,20 @@ def build_parser():
     e.add_argument("--backend", type=_choice(("local", "ray")), default="local")
     e.add_argument("--out", type=pathlib.Path, default=pathlib.Path("evolve"))
     e.add_argument("--no-progress", action="store_true")
+
+    er = sub.add_parser("evolve-report", help="EVOLVE.md: the paper's intrinsic behaviours "
+                                              "against the evolved ones (README)")
+    er.add_argument("--evolve", type=pathlib.Path, default=pathlib.Path("evolve"),
+                    help="`ebrl evolve`'s --out (default: %(default)s)")
+    er.add_argument("--hand", type=pathlib.Path, default=pathlib.Path("results"),
+                    help="the protocol's runs, the paper's rules (default: %(default)s)")
+    er.add_argument("--evolved", type=pathlib.Path, default=pathlib.Path("evolved"),
+                    help="the evolved genomes' runs: learner/, controller/, alone_*/, "
+                         "transfer/ (default: %(default)s)")
+    er.add_argument("--out", type=pathlib.Path, default=pathlib.Path("EVOLVE.md"))
+    er.add_argument("--figures", type=pathlib.Path, default=pathlib.Path("docs/figures"))
+    er.add_argument("--results", type=pathlib.Path, default=None, metavar="RESULTS.md",
+                    help="also regenerate this page's 'Evolved intrinsic behaviours' block")
 
     d = sub.add_parser("demo", help="a quick protocol, its report and one video")
     d.add_argument("--out", type=pathlib.Path, default=pathlib.Path("demo_results"))
@@ -454,6 +471,28 @@ def cmd_report(args):
     return 0
 
 
+def cmd_evolve_report(args):
+    try:
+        validate.results_folder(args.hand, "--hand")
+        for folder, what in ((args.evolve, "--evolve"), (args.evolved, "--evolved")):
+            if not folder.is_dir():
+                raise ValueError(f"{what}: no folder at {folder}")
+        validate.output_file(args.out, "--out")
+        validate.output_folder(args.figures, "--figures")
+        if args.results is not None:
+            validate.output_file(args.results, "--results")
+    except ValueError as e:
+        return _fail(str(e))
+    from experiments import evolved, results
+    try:
+        path = evolved.write(args.evolve, args.hand, args.evolved, args.out, args.figures,
+                             args.results)
+    except results.ResultsError as e:
+        return _fail(str(e))
+    print(f"evolve report: {path}" + (f"; published: {args.results}" if args.results else ""))
+    return 0
+
+
 def _render_variants(args):
     """(label, condition, --set pairs) of the run to render, or of the two to compare."""
     pairs = list(args.set)
@@ -466,6 +505,12 @@ def _render_variants(args):
     if args.compare is None:
         return [(args.condition, args.condition, pairs)]
     name, values = args.compare
+    if name == "behaviour":  # the paper's rule (no genome), then --behaviour's
+        if args.behaviour is None:
+            raise ValueError("--compare behaviour needs --behaviour FILE (the one set beside "
+                             "the paper's rule)")
+        return [(f"{values[0]} (paper)", args.condition, pairs),
+                (f"{values[1]} ({args.behaviour.stem})", args.condition, pairs)]
     if name in dict(pairs):
         raise ValueError(f"--compare {name} is also given with --set")
     return [(f"{name}={v}", args.condition, pairs + [(name, v)]) for v in values]
@@ -482,9 +527,11 @@ def cmd_render(args):
     except ValueError as e:
         return _fail(str(e))
     from experiments import protocol, rendering
+    paper_first = args.compare is not None and args.compare[0] == "behaviour"
     specs = [protocol.RunSpec(args.robot, condition, args.seed, args.steps, tuple(sorted(pairs)),
-                              drive=args.drive, behaviour=genome)
-             for _, condition, pairs in variants]
+                              drive=args.drive,
+                              behaviour=None if paper_first and i == 0 else genome)
+             for i, (_, condition, pairs) in enumerate(variants)]
     labels = [label for label, _, _ in variants]
     try:
         rendering.ensure_backend()
@@ -613,7 +660,7 @@ def cmd_ablate(args):
             _check_agent(args, combo)
             combos.append(combo)
         for r in (ablation.BY_NAME[n] for n in names):
-            for value in r.values[1:]:
+            for value in r.values:
                 _check_agent(args, [(r.name, value)])
         validate.output_folder(args.out, "--out")
         if args.baseline is not None:
@@ -825,7 +872,7 @@ def main(argv=None):
         return {"robots": cmd_robots, "run": cmd_run, "report": cmd_report,
                 "render": cmd_render, "bench": cmd_bench, "check": cmd_check,
                 "sweep": cmd_sweep, "ablate": cmd_ablate, "fit": cmd_fit, "evolve": cmd_evolve,
-                "demo": cmd_demo}[args.command](args)
+                "evolve-report": cmd_evolve_report, "demo": cmd_demo}[args.command](args)
     except KeyboardInterrupt:
         print("ebrl: interrupted; finished runs are kept, rerun to resume", file=sys.stderr)
         return INTERRUPTED

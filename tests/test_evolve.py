@@ -358,3 +358,45 @@ def test_study_keys_runs_by_genome_and_keeps_fits_keys():
     assert math.isfinite(evolve.Problem("two_wheel", paper, ("gain",), (0,)).score(
         {}, {("two_wheel", "avoidance", 0): {"metrics": {"goals": 3, "steps_per_trial": 10.0,
                                                          "first_trial_steps": 12}}})[0])
+
+
+def test_evolve_report_sets_the_evolved_learner_beside_the_papers_rule(tmp_path):
+    """A tiny evolution, the paper's rule and the evolved genome on three held-out seeds:
+    EVOLVE.md's ratio is the hand-coded mean steps per trial over the evolved one, computed
+    here from the runs' own run.json; folders not run are named; the RESULTS.md block."""
+    evo, hand, evolved = tmp_path / "evolve", tmp_path / "results", tmp_path / "evolved"
+    assert ebrl(*EVOLVE, "--generations", 1, "--out", evo).returncode == 0
+    best = evo / "evolve-two_wheel_best.json"
+    common = ["run", "--robot", "two_wheel", "--condition", "avoidance", "--seeds", "0-2",
+              "--steps", 4000, "--workers", 1, "--no-progress"]
+    assert ebrl(*common, "--out", hand).returncode == 0
+    evolved.mkdir()
+    assert ebrl(*common, "--behaviour", best, "--out", evolved / "learner").returncode == 0
+    results_md = tmp_path / "RESULTS.md"
+    results_md.write_text("# R\n\nkept above\n")
+    out, figures = tmp_path / "EVOLVE.md", tmp_path / "figures"
+    proc = ebrl("evolve-report", "--evolve", evo, "--hand", hand, "--evolved", evolved,
+                "--out", out, "--figures", figures, "--results", results_md)
+    assert proc.returncode == 0, proc.stderr
+    text = out.read_text()
+
+    def mean_steps(folder):
+        runs = [json.loads((folder / "two_wheel" / "avoidance" / f"seed_{s:03d}" / "run.json")
+                           .read_text())["metrics"]["steps_per_trial"] for s in range(3)]
+        runs = [v for v in runs if v is not None]    # a seed without a goal has none
+        assert runs
+        return sum(runs) / len(runs)
+
+    row = next(line for line in text.splitlines()
+               if line.startswith("| two_wheel | evolved for the learner |"))
+    assert f"{mean_steps(hand) / mean_steps(evolved / 'learner'):.2f}x" in row
+    assert "two_wheel, evolved as a controller" in text        # not run: named
+    assert "`evolve-two_wheel-controller`: not run." in text
+    assert (figures / "evolve-two_wheel_fitness.png").is_file()
+    assert (figures / "evolved_traces_two_wheel.png").is_file()
+    page = results_md.read_text()
+    assert page.startswith("# R\n\nkept above") and row in page
+    bad = ebrl("evolve-report", "--evolve", evo, "--hand", tmp_path / "nowhere", "--evolved",
+               evolved, "--out", tmp_path / "E2.md")
+    assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1
+    assert "nowhere" in bad.stderr and not (tmp_path / "E2.md").exists()

@@ -145,6 +145,31 @@ def test_compare_writes_one_video_with_both_halves_moving(tmp_path):
     assert 0 < data.find(b"moov") < data.find(b"mdat")
 
 
+def test_compare_behaviour_puts_the_papers_rule_beside_a_genome(tmp_path):
+    import dataclasses
+
+    import imageio.v3 as iio
+
+    from ebrl import behaviour as genomes
+    genome = tmp_path / "mine.json"
+    paper = genomes.load(ROOT / "behaviours" / "paper_eq8.json")
+    genomes.save(dataclasses.replace(paper, bias=0.6, random_rate=0.0), genome)
+    base = [sys.executable, "-m", "experiments", "render", "--robot", "two_wheel", "--seed", "0",
+            "--condition", "avoidance", "--steps", "30", "--compare", "behaviour"]
+    video = tmp_path / "behaviours.mp4"
+    proc = subprocess.run(base + ["--behaviour", str(genome), "--out", str(video)], cwd=ROOT,
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert "(hand-coded (paper))" in proc.stdout and "(evolved (mine))" in proc.stdout
+    frames = np.stack(list(iio.imiter(video)))
+    left, right = frames[:, :, :W], frames[:, :, W:]
+    assert np.abs(left[-1].astype(int) - right[-1].astype(int)).mean() > 0.05  # they part
+    bad = subprocess.run(base + ["--out", str(tmp_path / "x.mp4")], cwd=ROOT,
+                         capture_output=True, text=True, timeout=300)
+    assert bad.returncode == 2 and "--compare behaviour needs --behaviour" in bad.stderr
+    assert len(bad.stderr.strip().splitlines()) == 1 and not (tmp_path / "x.mp4").exists()
+
+
 def test_follow_camera_frames_a_3d_robot():
     """The follow camera looks at the robot from a few of its radii: the robot fills the
     frame's centre and many times the pixels it has from the top camera."""
