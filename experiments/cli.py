@@ -720,13 +720,17 @@ def _fit_args(args):
                          "--seeds or --promote-seeds)")
     if args.trial is not None and args.validate is None:
         raise ValueError("--trial chooses the trial --validate runs; give --validate too")
-    validate.output_folder(args.out, "--out")
     if args.results is not None:
         validate.output_file(args.results, "--results")
         validate.output_folder(args.figures, "--figures")
+    return names, _study_storage(args)
+
+
+def _study_storage(args):
+    """A study command's --out, --backend and storage, checked: the storage URL."""
+    validate.output_folder(args.out, "--out")
     _check_backend(args.backend)
-    url = _storage_url(args)
-    return names, url
+    return _storage_url(args)
 
 
 def cmd_fit(args):
@@ -770,7 +774,6 @@ def cmd_fit(args):
 
 def _evolve_args(args):
     """Every `ebrl evolve` argument checked before any work: (problem, storage URL)."""
-    from ebrl import behaviour as genomes
     from experiments import evolve
     from tasks.robots import resolve
     if args.population < 2:
@@ -785,9 +788,7 @@ def _evolve_args(args):
     else:
         start = evolve.paper_genome(entry)
     names = evolve.fields(start, args.space, learning=not args.no_learning)
-    validate.output_folder(args.out, "--out")
-    _check_backend(args.backend)
-    url = _storage_url(args)
+    url = _study_storage(args)
     problem = evolve.Problem(args.robot, start, names, tuple(args.seeds), args.steps,
                              learning=not args.no_learning, population=args.population,
                              sampler_seed=args.sampler_seed, drive=args.drive)

@@ -15,6 +15,7 @@ Every table is the avoidance condition at the robot's budget, means over the hel
 seeds with 95% percentile bootstrap intervals (results.summarize). A folder that is
 missing leaves its rows out, with a line saying so.
 """
+import functools
 import pathlib
 
 from ebrl import behaviour as genomes
@@ -35,22 +36,24 @@ ALONE = (("hand-coded (the paper's rule)", "alone_paper"),
 BEGIN, END = "<!-- ebrl evolve-report: generated, do not edit -->", "<!-- ebrl evolve-report: end -->"
 
 
-def _groups(folder):
-    """{robot label: the avoidance group of the folder's summary}, {} if no folder."""
+@functools.cache
+def _folder(folder):
+    """(runs, {robot label: the avoidance group of their summary}) of a run folder, each
+    folder loaded and bootstrapped once per report (write clears the cache); ({}, {}) if
+    there is no folder or no run in it."""
     folder = pathlib.Path(folder)
     if not folder.is_dir():
-        return {}
+        return {}, {}
     try:
-        summary = results.summarize(results.load_runs(folder))
+        runs = results.load_runs(folder)
     except results.ResultsError:
-        return {}
-    return {g["robot"]: g for g in summary["groups"] if g["condition"] == CONDITION}
+        return {}, {}
+    summary = results.summarize(runs)
+    return runs, {g["robot"]: g for g in summary["groups"] if g["condition"] == CONDITION}
 
 
-def _seed_values(folder, robot, key):
-    runs = results.load_runs(folder)
-    return [run["metrics"][key] for (r, c, _), run in sorted(runs.items())
-            if (r, c) == (robot, CONDITION)]
+def _groups(folder):
+    return _folder(folder)[1]
 
 
 def _cell(stats, digits=0):
@@ -61,7 +64,8 @@ def _cell(stats, digits=0):
 
 def _goals(folder, robot):
     import numpy as np
-    values = _seed_values(folder, robot, "goals")
+    values = [run["metrics"]["goals"] for (r, c, _), run in sorted(_folder(folder)[0].items())
+              if (r, c) == (robot, CONDITION)]
     rng = np.random.default_rng(results.BOOTSTRAP_SEED)
     return {"mean": float(np.mean(values)), "ci95": results.bootstrap_ci(values, rng)}
 
@@ -170,7 +174,7 @@ def traces_figure(hand, learner, robot, path):
     hand-coded beside evolved."""
     plt = report._plt()
     fig, axes = plt.subplots(1, 2, figsize=(11, 3.9))
-    runs = results.load_runs(hand)
+    runs = _folder(hand)[0]
     seed = report.typical_seed(runs, robot, CONDITION)
     for ax, (label, folder) in zip(axes, (("hand-coded", hand), ("evolved for the learner", learner))):
         report.draw_room(ax)
@@ -232,6 +236,7 @@ def build(evolve_dir, hand, evolved, figures):
 
 def write(evolve_dir, hand, evolved, out, figures, results_md=None):
     """EVOLVE.md at out (and the block in RESULTS.md when given); returns out."""
+    _folder.cache_clear()  # runs may have been added since an earlier report
     pathlib.Path(figures).mkdir(exist_ok=True)  # its parent exists (validate.output_folder)
     body = build(evolve_dir, hand, evolved, figures)
     text = "\n".join(["# Evolved intrinsic behaviours (Section 4's proposal)", "",

@@ -107,7 +107,7 @@ def main(argv=None):
     rng = random.Random(args.rng)
 
     started = time.monotonic()
-    passes, kills, failed_after = [], 0, []
+    passes, kills = [], 0
     while True:
         status, k, last = _killed_pass(args, out / "killed", rng)
         kills += k

@@ -1,15 +1,7 @@
 """`ebrl ablate` and the task settings through the real command line."""
 import json
-import pathlib
-import subprocess
-import sys
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-
-
-def ebrl(*args):
-    return subprocess.run([sys.executable, "-m", "experiments", *map(str, args)], cwd=ROOT,
-                          capture_output=True, text=True, timeout=600)
+from helpers import ebrl
 
 
 def test_a_task_setting_is_recorded_and_changes_the_run(tmp_path):

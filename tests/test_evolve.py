@@ -7,8 +7,6 @@ import json
 import math
 import pathlib
 import shutil
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -16,15 +14,10 @@ import pytest
 from ebrl import behaviour as genomes
 from ebrl import intrinsic
 from experiments import evolve, protocol, study
+from helpers import ROOT, ebrl
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
 PAPER_FILES = {"eq8": ROOT / "behaviours" / "paper_eq8.json",
                "eq9-10": ROOT / "behaviours" / "paper_eq9-10.json"}
-
-
-def ebrl(*args):
-    return subprocess.run([sys.executable, "-m", "experiments", *map(str, args)], cwd=ROOT,
-                          capture_output=True, text=True, timeout=600)
 
 
 # -- the family on hand-made readings ---------------------------------------------------

@@ -1,5 +1,6 @@
 """The protocol pipeline end to end, through the real command in real processes."""
 import ctypes.util
+import functools
 import json
 import os
 import pathlib
@@ -11,15 +12,11 @@ import time
 import numpy as np
 import pytest
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+import helpers
+from helpers import ROOT
 
 
-def ebrl(*args, check=True, **kw):
-    proc = subprocess.run([sys.executable, "-m", "experiments", *map(str, args)], cwd=ROOT,
-                          capture_output=True, text=True, timeout=600, **kw)
-    if check and proc.returncode != 0:
-        raise AssertionError(f"ebrl {args} failed:\n{proc.stdout}\n{proc.stderr}")
-    return proc
+ebrl = functools.partial(helpers.ebrl, check=True)  # a failure raises, unless check=False
 
 
 def summary(out):

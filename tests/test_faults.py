@@ -2,6 +2,7 @@
 --workers), Ray's failures and a lost cluster, a results folder that fills up or turns
 read-only. Each ends in one line, keeps every finished run, and a rerun finishes the set
 with the clean run's summary."""
+import functools
 import json
 import os
 import pathlib
@@ -13,17 +14,14 @@ import time
 import numpy as np
 import pytest
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+import helpers
+from helpers import ROOT
+
 SET = ["--robot", "two_wheel", "--condition", "all", "--seeds", "0-3", "--steps", "1000",
        "--no-progress"]
 
 
-def ebrl(*args, check=True, **kw):
-    proc = subprocess.run([sys.executable, "-m", "experiments", *map(str, args)], cwd=ROOT,
-                          capture_output=True, text=True, timeout=600, **kw)
-    if check and proc.returncode != 0:
-        raise AssertionError(f"ebrl {args} failed:\n{proc.stdout}\n{proc.stderr}")
-    return proc
+ebrl = functools.partial(helpers.ebrl, check=True)  # a failure raises, unless check=False
 
 
 def env(**hooks):

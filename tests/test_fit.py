@@ -2,20 +2,11 @@
 command line, its readings reaching the runs, and bad arguments."""
 import json
 import math
-import pathlib
-import subprocess
-import sys
 
 import pytest
 
 from experiments import fit, paper, study
-
-ROOT = pathlib.Path(__file__).resolve().parents[1]
-
-
-def ebrl(*args):
-    return subprocess.run([sys.executable, "-m", "experiments", *map(str, args)], cwd=ROOT,
-                          capture_output=True, text=True, timeout=600)
+from helpers import ebrl
 
 
 def _group(robot, condition, first, per_trial, goals_min=60, below_30=0, seeds=50):

@@ -1,10 +1,7 @@
 """The robot registry, the naming contract and the 3D robots, in real MuJoCo and through
 the real command line."""
 import math
-import pathlib
 import re
-import subprocess
-import sys
 
 import mujoco
 import numpy as np
@@ -12,15 +9,10 @@ import pytest
 
 import tasks
 from experiments import protocol, robotcheck, runner
+from helpers import ROOT, ebrl
 from tasks import navigation
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
 MODELS = ROOT / "models"
-
-
-def ebrl(*args, cwd=ROOT):
-    return subprocess.run([sys.executable, "-m", "experiments", *map(str, args)], cwd=cwd,
-                          capture_output=True, text=True, timeout=600)
 
 
 def test_every_command_takes_its_robots_from_the_registry():
