@@ -43,7 +43,7 @@ def edit_model(spec, config):
 class Physics(navigation.Physics):
     """Adds the thrusters, as force motors along the world's x and y; and, for the bump
     readings "stop" and "bounce", the velocity change at a contact, applied after each
-    substep (the coast then runs one substep at a time in Python)."""
+    substep (tasks.kernels.bump_phase)."""
 
     def _reload_from_data(self, data):
         super()._reload_from_data(data)
@@ -57,24 +57,28 @@ class Physics(navigation.Physics):
             raise navigation.ContractError(
                 "the floating drive needs 8 rangefinders (E, NE, N, NW, W, SW, S, SE; eq 10)")
         self._mass = float(m.body_subtreemass[self._base])
-        self._hull = navigation._id(m, mujoco.mjtObj.mjOBJ_GEOM, "hull")
-        self._kints[kernels.I_ACT0], self._kints[kernels.I_ACT1] = self._thrust_x, self._thrust_y
-        #: The bump reading applied after each substep: None ("grip", "slide": the
-        #: contact's physics alone), "stop" or "bounce"; set by the task, with the
-        #: share of the speed into the wall that "bounce" reflects.
+        k = self._kints
+        k[kernels.I_ACT0], k[kernels.I_ACT1] = self._thrust_x, self._thrust_y
+        k[kernels.I_HULL] = navigation._id(m, mujoco.mjtObj.mjOBJ_GEOM, "hull")
+        if self._free is not None:  # a free joint's dofs start with x, y
+            k[kernels.I_DOF_X], k[kernels.I_DOF_Y] = self._free_dof, self._free_dof + 1
+        else:
+            k[kernels.I_DOF_X] = m.jnt_dofadr[self.base_joints["x"]]
+            k[kernels.I_DOF_Y] = m.jnt_dofadr[self.base_joints["y"]]
         self.bump = None
-        self.restitution = 1.0
+        #: What the bump readings' coast works on (tasks.kernels.bump_phase): the contact
+        #: count and array, and scratch for the state before a substep and the normal.
+        self.bump_args = (kernels.contact_count(data.ptr), *kernels.contact_views(data.ptr),
+                          np.empty(m.nq), np.empty(m.nv), np.empty(2))
 
-    def _hull_contact(self):
-        """The contact normal pointing from the wall into the robot, or None."""
-        data = self.data.ptr
-        for k in range(data.ncon):
-            c = data.contact[k]
-            if c.geom1 == self._hull:
-                return -c.frame[:3]
-            if c.geom2 == self._hull:
-                return c.frame[:3].copy()
-        return None
+    def set_bump(self, bump, restitution=1.0):
+        """The bump reading applied after each substep: "stop" or "bounce" (with the
+        share of the speed into the wall that it reflects); anything else leaves a wall
+        to the contact's physics ("grip", "slide")."""
+        self.bump = bump if bump in ("stop", "bounce") else None
+        self._kints[kernels.I_BUMP] = {"stop": kernels.BUMP_STOP,
+                                       "bounce": kernels.BUMP_BOUNCE}.get(bump, kernels.BUMP_PHYSICS)
+        self._kfloats[kernels.F_RESTITUTION] = restitution
 
     def step(self, nstep=1):
         """Substeps; with "stop" or "bounce", a substep that brings the bumper into a wall
@@ -83,40 +87,12 @@ class Physics(navigation.Physics):
         part into the wall scaled by the restitution)."""
         if self.bump is None:
             return super().step(nstep)
-        qpos, qvel = self._qpos, self._qvel
-        for _ in range(nstep):
-            qpos0, qvel0 = qpos.copy(), qvel.copy()
-            super().step(1)
-            normal = self._hull_contact()
-            if normal is None:
-                continue
-            vx, vy = self._planar_velocity(qvel0)
-            into = vx * normal[0] + vy * normal[1]
-            if into >= 0:  # touching while moving away: the contact's physics alone
-                continue
-            qpos[:] = qpos0
-            if self.bump == "stop":
-                qvel[:] = 0.0
-            else:
-                back = (1.0 + self.restitution) * into
-                self._set_planar_velocity(vx - back * normal[0], vy - back * normal[1])
-            self.forward()
-
-    def _planar_velocity(self, qvel):
-        if self._free is not None:
-            return qvel[self._free_dof], qvel[self._free_dof + 1]  # a free joint's dofs start with x, y
-        m = self.model
-        return (qvel[m.jnt_dofadr[self.base_joints["x"]]], qvel[m.jnt_dofadr[self.base_joints["y"]]])
-
-    def _set_planar_velocity(self, vx, vy):
-        qvel = self._qvel
-        qvel[:] = 0.0
-        if self._free is not None:
-            qvel[self._free_dof], qvel[self._free_dof + 1] = vx, vy
-        else:
-            m = self.model
-            qvel[m.jnt_dofadr[self.base_joints["x"]]] = vx
-            qvel[m.jnt_dofadr[self.base_joints["y"]]] = vy
+        (m, d, _, _, qpos, _, xmat, _, bad_qacc, ints, floats) = self.kernel_args
+        status = kernels.bump_phase(m, d, nstep, bad_qacc, xmat, qpos, self._qvel, ints,
+                                    floats, self.bump_args)
+        self.substeps += nstep
+        if status != kernels.OK:
+            self.raise_for(status)
 
     def set_robot_pose(self, x, y, heading=0.0):
         """Places the robot at (x, y), at rest, heading 0 whatever is asked: a floating
@@ -140,8 +116,7 @@ class Floating(navigation.Navigation):
 
     def initialize_episode(self, physics):
         physics.step_seconds = substeps(physics.timestep, self.time_scale) * physics.timestep
-        physics.bump = self.config.bump if self.config.bump in ("stop", "bounce") else None
-        physics.restitution = self.config.restitution
+        physics.set_bump(self.config.bump, self.config.restitution)
         n = substeps(physics.timestep, self.time_scale)
         self.kernel_settings(physics, 1, n - 1, (MAX_ACCELERATION, 0.0))
         physics._kints[kernels.I_THRUST] = THRUSTS.index(self.config.thrust)
@@ -149,20 +124,16 @@ class Floating(navigation.Navigation):
         physics._kfloats[kernels.F_THRUST] = physics.thrust_scale()
         physics._kints[kernels.I_VELOCITY_CODE] = self.config.velocity_code == "code"
         physics._kfloats[kernels.F_VELOCITY_FULL] = VELOCITY_FULL_SCALE
-        # The compiled step serves the bump readings that leave a wall to the contact's
-        # physics ("grip", "slide"); "stop" and "bounce" run the hooks.
-        self._compiled = physics.bump is None
         super().initialize_episode(physics)
 
     def compiled_step(self, action, physics):
-        if not self._compiled:
-            return None
         a = self.compiled_action(action)
         u, z = self.draws(physics)
         sd = self.config.velocity_noise
         vz = self.random.normal(0.0, sd, size=2) if sd > 0 else navigation._NO_NOISE
         status, n, goal, codes, velocity = kernels.floating_step(
-            a, u, z, vz, *physics.kernel_args, physics._body_velocity)
+            a, u, z, vz, *physics.kernel_args, physics._body_velocity, physics._qvel,
+            physics.bump_args)
         observation = collections.OrderedDict()
         observation["range"], observation["velocity"] = codes, velocity
         return self.finish_compiled(status, n, goal, physics, observation)

@@ -47,6 +47,7 @@ mj_step = types.ExternalFunction("mj_step", types.void(_P, _P))
 mj_step1 = types.ExternalFunction("mj_step1", types.void(_P, _P))
 mj_step2 = types.ExternalFunction("mj_step2", types.void(_P, _P))
 mj_sensorPos = types.ExternalFunction("mj_sensorPos", types.void(_P, _P))
+mj_forward = types.ExternalFunction("mj_forward", types.void(_P, _P))
 mj_objectVelocity = types.ExternalFunction(
     "mj_objectVelocity", types.void(_P, _P, types.intc, types.intc, _P, types.intc))
 
@@ -86,6 +87,33 @@ def disable_flags(model):
     opt = model.opt
     return _int_field(opt.gravity.ctypes.data, lambda: opt.disableflags,
                       lambda v: setattr(opt, "disableflags", v))
+
+
+def contact_count(data):
+    """An int32 view of data->ncon (data: mujoco.MjData); it follows the warnings."""
+    return _int_field(data.solver_niter.ctypes.data, lambda: data.ncon,
+                      lambda v: setattr(data, "ncon", v))
+
+
+def contact_views(data):
+    """Views of mjData's contact array for the kernels: (float64 view, int32 view, the
+    layout), where layout holds, in 8-byte and 4-byte words, the struct's size, the
+    offset of its frame (the normal is its first row) and of geom1 and geom2. The array
+    is d->contact, which MuJoCo keeps at the start of the arena (mj_clearEfc), so the
+    views cover the arena and never move; the offsets are the bindings' own fields'."""
+    c = data.contact
+    size = c.frame.strides[0]
+    start = c.dist.ctypes.data
+    offsets = [c.frame.ctypes.data - start, c.geom1.ctypes.data - start,
+               c.geom2.ctypes.data - start]
+    if size % 8 or offsets[0] % 8 or offsets[1] % 4 or offsets[2] % 4:  # pragma: no cover
+        raise RuntimeError("tasks.kernels: an unexpected mjContact layout")
+    words = data.narena // 8
+    floats = np.ctypeslib.as_array((ctypes.c_double * words).from_address(start))
+    ints = np.ctypeslib.as_array((ctypes.c_int32 * (2 * words)).from_address(start))
+    layout = np.array([size // 8, offsets[0] // 8, size // 4, offsets[1] // 4, offsets[2] // 4,
+                       data.narena // size], dtype=np.int64)
+    return floats, ints, layout
 
 
 def warning_count(data, warning):
@@ -216,9 +244,15 @@ def noise_factor(noise, u):
  I_N_REST,         # substeps of the rest: the move (two-wheel), the coast (floating)
  I_THRUST,         # floating: the thrust reading, an index of tasks.config.THRUSTS
  I_VELOCITY_CODE,  # floating: 1 for the velocity read through the 0-255 code, else 0
- ) = range(11)
-N_INTS = 11
+ I_BUMP,           # floating: BUMP_PHYSICS, BUMP_STOP or BUMP_BOUNCE (tasks.config.BUMPS)
+ I_HULL,           # the bumper geom's id
+ I_DOF_X, I_DOF_Y,  # the base's x and y velocity dofs (qvel addresses)
+ ) = range(15)
+N_INTS = 15
 THRUST_SCALED, THRUST_DEMAND, THRUST_CLIPPED = range(3)  # tasks.config.THRUSTS, in order
+#: The floating bump readings as the coast runs them: the contact's physics alone
+#: ("grip", "slide"), or the velocity change at a contact ("stop", "bounce").
+BUMP_PHYSICS, BUMP_STOP, BUMP_BOUNCE = range(3)
 (F_UNIT, F_TIMESTEP, F_METRES_TO_UNITS, F_RADIUS, F_MIN_COS_TILT,
  F_X0, F_X1, F_Y0, F_Y1,  # the goal square, units
  F_LEVELS, F_PER_UNIT,    # Section 3.2's code: 255 and -255 / sensor range
@@ -228,8 +262,9 @@ THRUST_SCALED, THRUST_DEMAND, THRUST_CLIPPED = range(3)  # tasks.config.THRUSTS,
  F_VELOCITY,              # floating: m/s -> units per agent step
  F_THRUST,                # floating: the force per unit/step of velocity change
  F_VELOCITY_FULL,         # floating: the velocity code's full scale, units/step
- ) = range(18)
-N_FLOATS = 18
+ F_RESTITUTION,           # floating, bump "bounce": the share of the speed into the wall reflected
+ ) = range(19)
+N_FLOATS = 19
 
 
 @njit(cache=True)
@@ -339,7 +374,7 @@ def two_wheel_step(action, u, noise, m, d, flags, ctrl, qpos, xpos, xmat, sensor
     return OK, n, goal, readings(m, d, flags, sensordata, ints, floats, noise)
 
 
-# -- the floating drive (tasks.floating.Physics, bump "grip" or "slide") ---------------
+# -- the floating drive (tasks.floating.Physics) -------------------------------------
 
 @njit(cache=True)
 def demand(a, ints, floats):
@@ -357,14 +392,70 @@ def demand(a, ints, floats):
 
 
 @njit(cache=True)
-def floating_thrust(a, u, m, d, ctrl, xmat, bad_qacc, ints, floats):
+def hull_normal(ncon, contact_f, contact_i, layout, hull, normal):
+    """floating.Physics's bumper contact: the first contact of geom `hull`, its normal
+    (the frame's first row, x and y) written into `normal` pointing from the wall into
+    the robot. Returns False when the bumper touches nothing. layout: contact_views'."""
+    for k in range(ncon[0]):
+        f = k * layout[0] + layout[1]
+        i = k * layout[2]
+        if contact_i[i + layout[3]] == hull:
+            normal[0] = -contact_f[f]
+            normal[1] = -contact_f[f + 1]
+            return True
+        if contact_i[i + layout[4]] == hull:
+            normal[0] = contact_f[f]
+            normal[1] = contact_f[f + 1]
+            return True
+    return False
+
+
+@njit(cache=True)
+def bump_phase(m, d, n, bad_qacc, xmat, qpos, qvel, ints, floats, bump):
+    """floating.Physics.step: n substeps; with the bump readings "stop" and "bounce", a
+    substep that brings the bumper into a wall while moving towards it is undone (qpos
+    back, so no contact force acts), the velocity becomes 0 ("stop") or its mirror image
+    off the wall, the part into it scaled by the restitution ("bounce"), and mj_forward
+    recomputes the state. bump: (ncon, contact floats, contact ints, layout, qpos0,
+    qvel0, normal) from contact_count, contact_views and scratch arrays."""
+    if ints[I_BUMP] == BUMP_PHYSICS:
+        return step_phase(m, d, n, bad_qacc, xmat, ints, floats)
+    ncon, contact_f, contact_i, layout, qpos0, qvel0, normal = bump
+    dx, dy = ints[I_DOF_X], ints[I_DOF_Y]
+    for _ in range(n):
+        qpos0[:] = qpos
+        qvel0[:] = qvel
+        status = step_phase(m, d, 1, bad_qacc, xmat, ints, floats)
+        if status != OK:
+            return status
+        if not hull_normal(ncon, contact_f, contact_i, layout, ints[I_HULL], normal):
+            continue
+        vx, vy = qvel0[dx], qvel0[dy]
+        into = vx * normal[0] + vy * normal[1]
+        if into >= 0:  # touching while moving away: the contact's physics alone
+            continue
+        qpos[:] = qpos0
+        qvel[:] = 0.0
+        if ints[I_BUMP] == BUMP_BOUNCE:
+            back = (1.0 + floats[F_RESTITUTION]) * into
+            qvel[dx] = vx - back * normal[0]
+            qvel[dy] = vy - back * normal[1]
+        before = bad_qacc[0]
+        mj_forward(m, d)
+        if bad_qacc[0] != before:
+            return UNSTABLE
+    return OK
+
+
+@njit(cache=True)
+def floating_thrust(a, u, m, d, ctrl, qpos, xmat, bad_qacc, ints, floats, qvel, bump):
     """floating.Floating.before_step for the clipped action a and the noise's uniforms
     u: the thrust during one substep, then none. Returns a status."""
     nh, nv = factors(u, floats)
     scale = floats[F_THRUST]
     ctrl[ints[I_ACT0]] = demand(a[0], ints, floats) * nh * scale
     ctrl[ints[I_ACT1]] = demand(a[1], ints, floats) * nv * scale
-    status = step_phase(m, d, ints[I_N_FIRST], bad_qacc, xmat, ints, floats)
+    status = bump_phase(m, d, ints[I_N_FIRST], bad_qacc, xmat, qpos, qvel, ints, floats, bump)
     ctrl[ints[I_ACT0]] = 0.0 * scale
     ctrl[ints[I_ACT1]] = 0.0 * scale
     return status
@@ -391,18 +482,20 @@ def velocity_reading(v, noise, ints, floats):
 
 @njit(cache=True)
 def floating_step(action, u, noise, velocity_noise, m, d, flags, ctrl, qpos, xpos, xmat,
-                  sensordata, bad_qacc, ints, floats, velocity6):
+                  sensordata, bad_qacc, ints, floats, velocity6, qvel, bump):
     """One agent step of the floating drive, the hooks' work in their order: the thrust,
-    the coast, the goal test, the encoded readings and the velocity reading. Returns
-    (status, substeps run, in the goal, readings, velocity)."""
+    the coast (with the bump reading's velocity change), the goal test, the encoded
+    readings and the velocity reading. Returns (status, substeps run, in the goal,
+    readings, velocity)."""
     nothing = np.empty(0)
     if not clip_unit(action):
         return NOT_FINITE, 0, False, nothing, nothing
-    status = floating_thrust(action, u, m, d, ctrl, xmat, bad_qacc, ints, floats)
+    status = floating_thrust(action, u, m, d, ctrl, qpos, xmat, bad_qacc, ints, floats,
+                             qvel, bump)
     n = ints[I_N_FIRST]
     if status != OK:
         return status, n, False, nothing, nothing
-    status = step_phase(m, d, ints[I_N_REST], bad_qacc, xmat, ints, floats)
+    status = bump_phase(m, d, ints[I_N_REST], bad_qacc, xmat, qpos, qvel, ints, floats, bump)
     n += ints[I_N_REST]
     if status != OK:
         return status, n, False, nothing, nothing

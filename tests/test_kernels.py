@@ -16,7 +16,8 @@ def _pair(robot, **fields):
 @pytest.mark.parametrize("robot,fields", [
     ("two_wheel", {}),
     ("two_wheel", {"sensor_noise": 0.0, "action_noise": 0.0}),
-    ("floating", {}),
+    ("floating", {}),  # bump "bounce"
+    ("floating", {"bump": "stop", "velocity_code": "none"}),
     ("floating", {"thrust": "clipped", "bump": "slide"}),
     ("floating", {"thrust": "demand", "action_noise": 0.0}),
     ("floating", {"velocity_noise": 0.1, "velocity_code": "code"}),
@@ -78,4 +79,35 @@ def test_the_struct_views_are_the_fields_they_name():
     d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number = 3
     assert count[0] == 3
     d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number = 0
+    env.close()
+
+
+def test_the_contact_views_read_mujocos_contacts():
+    env = tasks.load("floating", seed=0, bump="grip")
+    physics = env.physics
+    m, d = physics.model.ptr, physics.data.ptr
+    ncon, floats, ints, layout = physics.bump_args[:4]
+    env.reset()
+    # the puck pressed into the west wall, then into the south-west corner
+    for x, y in ((physics.robot_radius - 0.2, 30.0),
+                 (physics.robot_radius - 0.2, physics.robot_radius - 0.2)):
+        physics.set_robot_pose(x, y)
+        assert d.ncon >= 1 and ncon[0] == d.ncon
+        normal = np.zeros(2)
+        assert kernels.hull_normal(ncon, floats, ints, layout, physics._kints[kernels.I_HULL],
+                                   normal)
+        for k in range(d.ncon):
+            c = d.contact[k]
+            f = k * layout[0] + layout[1]
+            assert floats[f: f + 9].tolist() == c.frame.tolist()
+            assert ints[k * layout[2] + layout[3]] == c.geom1
+            assert ints[k * layout[2] + layout[4]] == c.geom2
+        hull = [k for k in range(d.ncon) if physics._kints[kernels.I_HULL] in d.contact[k].geom][0]
+        sign = -1.0 if d.contact[hull].geom1 == physics._kints[kernels.I_HULL] else 1.0
+        assert normal.tolist() == (sign * d.contact[hull].frame[:2]).tolist()
+        assert normal[0] > 0.5  # from the wall into the robot: east
+    # nothing touched: no normal
+    physics.set_robot_pose(*physics.start[:2])
+    assert d.ncon == 0 and not kernels.hull_normal(ncon, floats, ints, layout,
+                                                   physics._kints[kernels.I_HULL], np.zeros(2))
     env.close()
