@@ -247,8 +247,12 @@ def noise_factor(noise, u):
  I_BUMP,           # floating: BUMP_PHYSICS, BUMP_STOP or BUMP_BOUNCE (tasks.config.BUMPS)
  I_HULL,           # the bumper geom's id
  I_DOF_X, I_DOF_Y,  # the base's x and y velocity dofs (qvel addresses)
- ) = range(15)
-N_INTS = 15
+ I_WHEELS,         # two-wheel: 1 for wheels under servos (WheelPhysics), 0 for a planar base
+ I_ACT_ADR0, I_ACT_ADR1,    # wheels: the servos' activations (act addresses), left, right
+ I_WHEEL_Q0, I_WHEEL_Q1,    # wheels: the wheel hinges' qpos addresses, left, right
+ I_RAMP_FIRST, I_RAMP_REST,  # wheels: substeps of each phase's ramp (WheelPhysics.RAMP)
+ ) = range(22)
+N_INTS = 22
 THRUST_SCALED, THRUST_DEMAND, THRUST_CLIPPED = range(3)  # tasks.config.THRUSTS, in order
 #: The floating bump readings as the coast runs them: the contact's physics alone
 #: ("grip", "slide"), or the velocity change at a contact ("stop", "bounce").
@@ -263,8 +267,9 @@ BUMP_PHYSICS, BUMP_STOP, BUMP_BOUNCE = range(3)
  F_THRUST,                # floating: the force per unit/step of velocity change
  F_VELOCITY_FULL,         # floating: the velocity code's full scale, units/step
  F_RESTITUTION,           # floating, bump "bounce": the share of the speed into the wall reflected
- ) = range(19)
-N_FLOATS = 19
+ F_HALF_TRACK, F_WHEEL_RADIUS,  # wheels: half the wheels' distance apart, their radius (m)
+ ) = range(21)
+N_FLOATS = 21
 
 
 @njit(cache=True)
@@ -303,7 +308,7 @@ def factors(u, floats):
     return noise_factor(noise, u[0]), noise_factor(noise, u[1])
 
 
-# -- the two-wheel drive on a planar base (tasks.two_wheel.Physics) --------------------
+# -- the two-wheel drive (tasks.two_wheel: Physics, a planar base; WheelPhysics, wheels) --
 
 @njit(cache=True)
 def drive(ctrl, ints, floats, speed, yaw_rate):
@@ -313,26 +318,70 @@ def drive(ctrl, ints, floats, speed, yaw_rate):
 
 
 @njit(cache=True)
-def two_wheel_turn(a, u, m, d, ctrl, qpos, xpos, xmat, bad_qacc, ints, floats, plan):
-    """two_wheel.TwoWheel.before_step for the clipped action a and the noise's uniforms
-    u: the turn phase, then the move phase's drive set. plan gets (move, turn sign, x,
-    y, cos, sin of the heading after the turn) for two_wheel_finish. Returns a status."""
-    noise_turn, noise_move = factors(u, floats)
-    turn = -a * floats[F_GAIN0] * noise_turn  # counter-clockwise positive
-    move = floats[F_GAIN1] * (1.0 - abs(a)) * noise_move
-    n_turn, n_move, dt = ints[I_N_FIRST], ints[I_N_REST], floats[F_TIMESTEP]
-    drive(ctrl, ints, floats, 0.0, turn / (n_turn * dt))
-    status = step_phase(m, d, n_turn, bad_qacc, xmat, ints, floats)
-    x, y, heading = base_pose(qpos, xpos, xmat, ints, floats)
-    plan[0] = move
-    plan[1] = 1.0 if turn > 0 else -1.0
-    plan[2], plan[3], plan[4], plan[5] = x, y, math.cos(heading), math.sin(heading)
-    drive(ctrl, ints, floats, move / (n_move * dt), 0.0)
+def two_wheel_phase(turn, amount, n, ramp, m, d, ctrl, xmat, bad_qacc, ints, floats):
+    """A phase of n substeps that turns by `amount` rad counter-clockwise (turn) or moves
+    `amount` units forward: a planar base's servos get the speed that does it in the n
+    substeps (two_wheel.Physics.begin_turn, begin_move); wheels get the speeds that turn
+    them by the phase's angle over the first `ramp` substeps, then zero speeds for the
+    rest, their servos settling on the targets (WheelPhysics._wheel_speeds and step).
+    Returns a status."""
+    dt = floats[F_TIMESTEP]
+    if ints[I_WHEELS] == 0:
+        if turn:
+            drive(ctrl, ints, floats, 0.0, amount / (n * dt))
+        else:
+            drive(ctrl, ints, floats, amount / (n * dt), 0.0)
+        return step_phase(m, d, n, bad_qacc, xmat, ints, floats)
+    if turn:
+        w = amount * floats[F_HALF_TRACK] / floats[F_WHEEL_RADIUS]
+        left, right = -w, w
+    else:
+        w = amount * floats[F_UNIT] / floats[F_WHEEL_RADIUS]
+        left, right = w, w
+    ctrl[ints[I_ACT0]] = left / (ramp * dt)
+    ctrl[ints[I_ACT1]] = right / (ramp * dt)
+    status = step_phase(m, d, ramp, bad_qacc, xmat, ints, floats)
+    if status != OK:
+        return status
+    ctrl[ints[I_ACT0]] = 0.0
+    ctrl[ints[I_ACT1]] = 0.0
+    if n > ramp:
+        status = step_phase(m, d, n - ramp, bad_qacc, xmat, ints, floats)
     return status
 
 
 @njit(cache=True)
-def two_wheel_finish(m, d, ctrl, qpos, xpos, xmat, bad_qacc, ints, floats, plan):
+def two_wheel_halt(ctrl, act, qpos, ints, floats):
+    """Physics.halt (both servos' speeds 0) or WheelPhysics.halt (the wheels' speeds 0
+    and their targets where the wheels are: a stalled wheel gives up the rest)."""
+    if ints[I_WHEELS] == 0:
+        drive(ctrl, ints, floats, 0.0, 0.0)
+        return
+    ctrl[ints[I_ACT0]] = 0.0
+    act[ints[I_ACT_ADR0]] = qpos[ints[I_WHEEL_Q0]]
+    ctrl[ints[I_ACT1]] = 0.0
+    act[ints[I_ACT_ADR1]] = qpos[ints[I_WHEEL_Q1]]
+
+
+@njit(cache=True)
+def two_wheel_turn(a, u, m, d, ctrl, qpos, xpos, xmat, bad_qacc, ints, floats, plan):
+    """two_wheel.TwoWheel.before_step for the clipped action a and the noise's uniforms
+    u: the turn phase. plan gets (move, turn sign, x, y, cos, sin of the heading after
+    the turn) for the move phase and two_wheel_finish. Returns a status."""
+    noise_turn, noise_move = factors(u, floats)
+    turn = -a * floats[F_GAIN0] * noise_turn  # counter-clockwise positive
+    move = floats[F_GAIN1] * (1.0 - abs(a)) * noise_move
+    status = two_wheel_phase(True, turn, ints[I_N_FIRST], ints[I_RAMP_FIRST], m, d, ctrl,
+                             xmat, bad_qacc, ints, floats)
+    x, y, heading = base_pose(qpos, xpos, xmat, ints, floats)
+    plan[0] = move
+    plan[1] = 1.0 if turn > 0 else -1.0
+    plan[2], plan[3], plan[4], plan[5] = x, y, math.cos(heading), math.sin(heading)
+    return status
+
+
+@njit(cache=True)
+def two_wheel_finish(m, d, ctrl, act, qpos, xpos, xmat, bad_qacc, ints, floats, plan):
     """two_wheel.TwoWheel.after_step: a move stopped short by more than the tolerance
     turns the rest, at MAX_TURN per MAX_MOVE, in the commanded turn's direction; then
     the drive halts. Returns (status, substeps run, in the goal)."""
@@ -342,15 +391,17 @@ def two_wheel_finish(m, d, ctrl, qpos, xpos, xmat, bad_qacc, ints, floats, plan)
     if rest > floats[F_TOLERANCE]:
         leftover = plan[1] * rest * floats[F_GAIN0] / floats[F_GAIN1]
         n = ints[I_N_FIRST]
-        drive(ctrl, ints, floats, 0.0, leftover / (n * floats[F_TIMESTEP]))
-        status = step_phase(m, d, n, bad_qacc, xmat, ints, floats)
-    drive(ctrl, ints, floats, 0.0, 0.0)
+        status = two_wheel_phase(True, leftover, n, ints[I_RAMP_FIRST], m, d, ctrl, xmat,
+                                 bad_qacc, ints, floats)
+        if status != OK:
+            return status, n, False
+    two_wheel_halt(ctrl, act, qpos, ints, floats)
     return status, n, goal_reached(qpos, xpos, xmat, ints, floats)
 
 
 @njit(cache=True)
 def two_wheel_step(action, u, noise, m, d, flags, ctrl, qpos, xpos, xmat, sensordata,
-                   bad_qacc, ints, floats, plan):
+                   bad_qacc, ints, floats, plan, act):
     """One agent step of the two-wheel drive, the hooks' work in their order: the turn,
     the move, a blocked move's leftover turn, the halt, the goal test and the encoded
     readings. Returns (status, substeps run, in the goal, readings)."""
@@ -362,11 +413,12 @@ def two_wheel_step(action, u, noise, m, d, flags, ctrl, qpos, xpos, xmat, sensor
     n = ints[I_N_FIRST]
     if status != OK:
         return status, n, False, nothing
-    status = step_phase(m, d, ints[I_N_REST], bad_qacc, xmat, ints, floats)
+    status = two_wheel_phase(False, plan[0], ints[I_N_REST], ints[I_RAMP_REST], m, d, ctrl,
+                             xmat, bad_qacc, ints, floats)
     n += ints[I_N_REST]
     if status != OK:
         return status, n, False, nothing
-    status, more, goal = two_wheel_finish(m, d, ctrl, qpos, xpos, xmat, bad_qacc, ints,
+    status, more, goal = two_wheel_finish(m, d, ctrl, act, qpos, xpos, xmat, bad_qacc, ints,
                                           floats, plan)
     n += more
     if status != OK:

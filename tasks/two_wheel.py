@@ -62,6 +62,10 @@ class Physics(navigation.Physics):
             m.actuator_gainprm[i, 0] = kv
             m.actuator_biasprm[i, 2] = -kv
 
+    def ramp_substeps(self, n):
+        """The servos' speeds hold for the whole of an n-substep phase."""
+        return n
+
     def drive(self, speed, yaw_rate):
         """Servo targets: speed in units/s along the heading, yaw rate in rad/s."""
         ctrl = self._ctrl
@@ -90,18 +94,16 @@ class TwoWheel(navigation.Navigation):
         physics.step_seconds = (self._n_turn + self._n_move) * dt
         self.kernel_settings(physics, self._n_turn, self._n_move, (MAX_TURN, MAX_MOVE))
         physics._kfloats[kernels.F_TOLERANCE] = BLOCKED_TOLERANCE
-        # The compiled step serves the planar base; the wheels run the hooks.
-        self._compiled = isinstance(physics, Physics)
+        physics._kints[kernels.I_RAMP_FIRST] = physics.ramp_substeps(self._n_turn)
+        physics._kints[kernels.I_RAMP_REST] = physics.ramp_substeps(self._n_move)
         self._plan = np.zeros(6)
         super().initialize_episode(physics)
 
     def compiled_step(self, action, physics):
-        if not self._compiled:
-            return None
         a = self.compiled_action(action)
         u, z = self.draws(physics)
         status, n, goal, codes = kernels.two_wheel_step(a, u, z, *physics.kernel_args,
-                                                        self._plan)
+                                                        self._plan, physics._act)
         observation = collections.OrderedDict()
         observation["range"] = codes
         return self.finish_compiled(status, n, goal, physics, observation)
@@ -164,10 +166,20 @@ class WheelPhysics(navigation.Physics):
         self.wheel_radius = float(m.geom_size[geoms[0], 0])
         self.half_track = float(abs(m.body_pos[bodies[0], 1] - m.body_pos[bodies[1], 1]) / 2)
         self._ramp_left = 0  # substeps left of the current phase's ramp
+        k, f = self._kints, self._kfloats
+        k[kernels.I_WHEELS] = 1
+        k[kernels.I_ACT0], k[kernels.I_ACT1] = ids
+        k[kernels.I_ACT_ADR0], k[kernels.I_ACT_ADR1] = self._wheel_act
+        k[kernels.I_WHEEL_Q0], k[kernels.I_WHEEL_Q1] = self._wheel_qpos
+        f[kernels.F_HALF_TRACK], f[kernels.F_WHEEL_RADIUS] = self.half_track, self.wheel_radius
+
+    def ramp_substeps(self, n):
+        """The substeps of an n-substep phase over which the wheels' targets move."""
+        return max(1, round(self.RAMP * n))
 
     def _wheel_speeds(self, left, right, n):
         """Turns the wheels by (left, right) rad over the ramp of an n-substep phase."""
-        ramp = max(1, round(self.RAMP * n))
+        ramp = self.ramp_substeps(n)
         self._ramp_left = ramp
         ctrl = self._ctrl
         ctrl[self._wheel_ctrl[0]] = left / (ramp * self.timestep)

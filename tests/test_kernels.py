@@ -16,6 +16,8 @@ def _pair(robot, **fields):
 @pytest.mark.parametrize("robot,fields", [
     ("two_wheel", {}),
     ("two_wheel", {"sensor_noise": 0.0, "action_noise": 0.0}),
+    ("diff_drive", {}),  # wheels under servos (WheelPhysics)
+    ("hovercraft", {"bump": "bounce"}),  # a free joint's velocity dofs
     ("floating", {}),  # bump "bounce"
     ("floating", {"bump": "stop", "velocity_code": "none"}),
     ("floating", {"thrust": "clipped", "bump": "slide"}),
