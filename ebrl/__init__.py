@@ -33,9 +33,10 @@ eq 7      R += rho r (1 - R) / rho r R  kernels.eq7
           reliable element            test_ebrl_memory.py:
                                       test_forgetting_takes_the_least_reliable_and_splices_links,
                                       test_forgetting_takes_the_first_of_equal_reliabilities
-eq 8      avoidance by turning        intrinsic.avoid_by_turning ("eq8")
+eq 8      avoidance by turning        intrinsic.eq8, via intrinsic.avoid_by_turning ("eq8")
           test_eq8_two_wheel_avoidance_by_hand
-eq 9-10   avoidance by accelerating   intrinsic.avoid_by_accelerating ("eq9-10")
+eq 9-10   avoidance by accelerating   intrinsic.eq9, intrinsic.eq10, via
+                                      intrinsic.avoid_by_accelerating ("eq9-10")
           test_eq9_eq10_floating_avoidance_by_hand
 4         eq 8 and eq 9-10 as one     behaviour.Turning, behaviour.Accelerating (genomes,
           point of two families       JSON; `ebrl run --behaviour`, `ebrl evolve`)

@@ -9,32 +9,42 @@ eq9_dead_zone ("zero": eq 9's "not changed" is zero acceleration; "keep": the
 fallback's previous acceleration on that axis) and random_in_avoidance ("replace":
 the random action replaces the avoidance action; "add": it is added to it, clipped).
 """
-import functools
+import ctypes.util
 
 import numpy as np
+from llvmlite import binding
+from numba import njit, types
 
 from ebrl.config import READINGS, check_reading
 
 THETA = 0.25  # eq 9's sensitivity threshold for the floating robot
 
+# The C library's fma (a * b + c rounded once), for eq 8's sum as numpy's dot makes it.
+binding.load_library_permanently(ctypes.util.find_library("m"))
+_fma = types.ExternalFunction("fma", types.float64(types.float64, types.float64, types.float64))
 
-@functools.cache
-def _ranks(half):
-    """eq 8's i = 1..half, made once per sensor count."""
-    return np.arange(1, half + 1)
+_NOTHING = np.zeros(0)
 
 
-def avoid_by_turning(readings):
+@njit(cache=True)
+def eq8(s):
     """eq 8: a = sum_{i=1}^{n//2} i (s_i - s_{n+1-i}) / sum_{i=1}^{n//2} i.
 
-    readings leftmost first; a > 0 turns right, away from something on the left.
-    """
-    s = np.asarray(readings, dtype=np.float64)
-    half = len(s) // 2
-    return float(np.dot(_ranks(half), s[:half] - s[: -half - 1: -1]) / (half * (half + 1) // 2))
+    s: the readings, leftmost first; a > 0 turns right, away from something on the left.
+    The sum is numpy's dot of the ranks and the differences as it runs on this project's
+    machines (BLAS on an FMA CPU): the first product, then each next one fused with the
+    sum, one rounding each, so a run keeps the bits it had when this was np.dot."""
+    n = s.shape[0]
+    half = n // 2
+    total = 0.0
+    for i in range(half):
+        d = s[i] - s[n - 1 - i]
+        total = (i + 1) * d if i == 0 else _fma(float(i + 1), d, total)
+    return total / (half * (half + 1) // 2)
 
 
-def _eq9(b, theta, unchanged=0.0):
+@njit(cache=True)
+def eq9(b, theta, unchanged):
     """eq 9: the dead-zoned acceleration for one axis; `unchanged` inside the dead zone
     (0 for eq9_dead_zone "zero", the previous acceleration for "keep")."""
     if b <= -theta:
@@ -44,20 +54,47 @@ def _eq9(b, theta, unchanged=0.0):
     return unchanged
 
 
+@njit(cache=True)
+def eq10(s):
+    """eq 10 for the readings E, NE, N, NW, W, SW, S, SE (counter-clockwise):
+    b_h = 0.5 (s_W - s_E) + 0.25 (s_NW + s_SW - s_NE - s_SE), and symmetrically
+    b_v = 0.5 (s_S - s_N) + 0.25 (s_SW + s_SE - s_NW - s_NE): away from obstacles."""
+    e, ne, n, nw, w, sw, so, se = s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7]
+    b_h = 0.5 * (w - e) + 0.25 * (nw + sw - ne - se)
+    b_v = 0.5 * (so - n) + 0.25 * (sw + se - nw - ne)
+    return b_h, b_v
+
+
+def _readings(readings):
+    return np.ascontiguousarray(readings, dtype=np.float64)
+
+
+def avoid_by_turning(readings):
+    """eq 8 (`eq8`) for the readings, leftmost first: the turn, a > 0 to the right."""
+    return float(eq8(_readings(readings)))
+
+
 def avoid_by_accelerating(readings, theta=THETA, previous=None):
     """eq 9-10 for both axes. readings: E, NE, N, NW, W, SW, S, SE (counter-clockwise).
 
-    eq 10: b_h = 0.5 (s_W - s_E) + 0.25 (s_NW + s_SW - s_NE - s_SE), and symmetrically
-    b_v = 0.5 (s_S - s_N) + 0.25 (s_SW + s_SE - s_NW - s_NE): away from obstacles.
-    eq 9's dead zone ("not changed") gives 0 on that axis, or previous[axis] when
-    previous (the last acceleration, eq9_dead_zone "keep") is given.
+    eq 10 (`eq10`) gives each axis's b, away from obstacles; eq 9 (`eq9`) its dead-zoned
+    acceleration: 0 on an axis inside the dead zone, or previous[axis] when previous
+    (the last acceleration, eq9_dead_zone "keep") is given.
     """
-    e, ne, n, nw, w, sw, s, se = np.asarray(readings, dtype=np.float64).tolist()
-    b_h = 0.5 * (w - e) + 0.25 * (nw + sw - ne - se)
-    b_v = 0.5 * (s - n) + 0.25 * (sw + se - nw - ne)
+    b_h, b_v = eq10(_readings(readings))
     if previous is None:
-        return np.array([_eq9(b_h, theta), _eq9(b_v, theta)])
-    return np.array([_eq9(b_h, theta, float(previous[0])), _eq9(b_v, theta, float(previous[1]))])
+        return np.array([eq9(b_h, theta, 0.0), eq9(b_v, theta, 0.0)])
+    return np.array([eq9(b_h, theta, float(previous[0])), eq9(b_v, theta, float(previous[1]))])
+
+
+@njit(cache=True)
+def clip_unit(a):
+    """a clipped to [-1, 1] in place, as np.clip."""
+    for i in range(a.shape[0]):
+        v = a[i]
+        v = v if v > -1.0 else -1.0
+        a[i] = v if v < 1.0 else 1.0
+    return a
 
 
 def _clip(a):
@@ -68,6 +105,46 @@ def _clip(a):
 def random_action(rng, action_dim, sd=0.5):
     """Section 3.4's random action: Gaussian, mean 0, sd 0.5, clipped to [-1, 1]."""
     return _clip(rng.normal(0.0, sd, size=action_dim))
+
+
+#: The compiled avoidance (Intrinsic with the paper's functions): eq 8 or eq 9-10.
+TURNING, ACCELERATING = range(2)
+
+
+@njit(cache=True)
+def avoid_into(kind, readings, theta, last, out):
+    """out = eq 8's turn (TURNING) or eq 9-10's accelerations (ACCELERATING), holding
+    `last` inside eq 9's dead zone when it is not empty."""
+    if kind == TURNING:
+        out[0] = eq8(readings)
+        return
+    b_h, b_v = eq10(readings)
+    hold = last.shape[0] > 0
+    out[0] = eq9(b_h, theta, last[0] if hold else 0.0)
+    out[1] = eq9(b_v, theta, last[1] if hold else 0.0)
+
+
+@njit(cache=True)
+def fallback_act(kind, readings, random, add, theta, last, out):
+    """Intrinsic's action once its draws are made: `random` the random action's
+    Gaussians (empty: the uniform draw was not below the rate), so out = the avoidance
+    (avoid_into), or the random action clipped, or with add the two summed and clipped;
+    `last`, when not empty, becomes the action. Returns True for the random action."""
+    if random.shape[0] == 0:
+        avoid_into(kind, readings, theta, last, out)
+    else:
+        if add:
+            avoid_into(kind, readings, theta, last, out)
+            for i in range(out.shape[0]):
+                v = random[i]
+                v = v if v > -1.0 else -1.0
+                out[i] = out[i] + (v if v < 1.0 else 1.0)
+        else:
+            out[:] = random
+        clip_unit(out)
+    if last.shape[0]:
+        last[:] = out
+    return random.shape[0] > 0
 
 
 class RandomWalk:
@@ -97,6 +174,11 @@ class Intrinsic:
     which eq 9 keeps on an axis inside its dead zone; 0 at first and after reset(),
     which the agent calls when a trial ends (the robot restarts at rest). Actions the
     memory takes in between are not seen: the fallback holds its own output.
+
+    With the paper's avoid functions (avoid_by_turning, avoid_by_accelerating) the
+    draws are made, then one compiled fallback_act does the rest; any other avoid (an
+    evolved genome's) runs the same steps in Python (tests/test_ebrl_readings.py checks
+    the two alike).
     """
 
     def __init__(self, avoid, action_dim, random_rate=0.2, sd=0.5, *,
@@ -107,6 +189,7 @@ class Intrinsic:
         self._add = random_in_avoidance == "add"
         self.last = np.zeros(action_dim) if hold else None  # eq 9's "not changed"
         self.choice = None  # who chose the last action: "intrinsic" or "random"
+        self._kind = {avoid_by_turning: TURNING, avoid_by_accelerating: ACCELERATING}.get(avoid)
 
     def _avoid(self, readings):
         if self.last is None:
@@ -114,6 +197,14 @@ class Intrinsic:
         return np.array(self.avoid(readings, previous=self.last), dtype=np.float64, ndmin=1)
 
     def __call__(self, readings, rng):
+        if self._kind is not None:
+            random = (rng.normal(0.0, self.sd, size=self.action_dim)
+                      if rng.random() < self.random_rate else _NOTHING)
+            out = np.empty(self.action_dim)
+            chose = fallback_act(self._kind, _readings(readings), random, self._add, THETA,
+                                 _NOTHING if self.last is None else self.last, out)
+            self.choice = "random" if chose else "intrinsic"
+            return out
         if rng.random() < self.random_rate:
             self.choice = "random"
             action = random_action(rng, self.action_dim, self.sd)
@@ -123,13 +214,13 @@ class Intrinsic:
             self.choice = "intrinsic"
             action = self._avoid(readings)
         if self.last is not None:
-            self.last = action.copy()
+            self.last[:] = action
         return action
 
     def reset(self):
         """A trial ends: eq 9's held acceleration (hold=True) returns to 0."""
         if self.last is not None:
-            self.last = np.zeros(self.action_dim)
+            self.last[:] = 0.0
 
 
 #: Section 3.4's intrinsic behaviours by equation: (behaviour, action dimension).

@@ -386,6 +386,56 @@ def test_random_in_avoidance_add_is_avoidance_plus_random_clipped():
     np.testing.assert_array_equal(add2(west, rng), want)
 
 
+@pytest.mark.parametrize("behaviour,dead_zone,mode", [
+    ("eq8", "zero", "replace"), ("eq8", "zero", "add"),
+    ("eq9-10", "zero", "replace"), ("eq9-10", "keep", "add"), ("eq9-10", "keep", "replace")])
+def test_the_compiled_fallback_is_the_python_one(behaviour, dead_zone, mode):
+    """The paper's avoidance runs as one compiled fallback_act; the same avoid function
+    behind a wrapper (as an evolved genome's is) runs the Python steps: the same
+    actions, choices, held accelerations and draws."""
+    compiled = intrinsic.fallback_for(behaviour, "avoidance", 0.3, eq9_dead_zone=dead_zone,
+                                      random_in_avoidance=mode)
+    assert compiled._kind is not None
+    avoid, dim = intrinsic.BEHAVIOURS[behaviour]
+    python = intrinsic.Intrinsic(lambda s, **kw: avoid(s, **kw), dim, 0.3,
+                                 random_in_avoidance=mode, hold=compiled.last is not None)
+    assert python._kind is None
+    r1, r2, readings = np.random.default_rng(4), np.random.default_rng(4), np.random.default_rng(9)
+    n = 7 if behaviour == "eq8" else 8
+    for step in range(2000):
+        s = readings.integers(0, 256, n) / 255.0 * (step % 3 != 0)  # a third all quiet
+        a, b = compiled(s, r1), python(s, r2)
+        assert a.tobytes() == b.tobytes() and compiled.choice == python.choice, step
+        if compiled.last is not None:
+            assert compiled.last.tobytes() == python.last.tobytes()
+        if step % 97 == 0:
+            compiled.reset(), python.reset()
+    assert r1.random() == r2.random()
+
+
+def test_eq8_sums_with_fused_multiply_adds():
+    """eq 8's sum: the first product, then each next one fused with the sum (one
+    rounding each, computed here exactly with fractions), as numpy's dot sums on the
+    machines the results come from; within a rounding of np.dot anywhere."""
+    from fractions import Fraction
+
+    def fma(a, b, c):
+        return float(Fraction(a) * Fraction(b) + Fraction(c))
+
+    rng = np.random.default_rng(0)
+    for n in range(2, 17):
+        half = n // 2
+        for _ in range(500):
+            s = rng.integers(0, 256, n) / 255.0
+            d = s[:half] - s[: -half - 1: -1]
+            total = 1.0 * d[0]
+            for i in range(1, half):
+                total = fma(float(i + 1), d[i], total)
+            assert intrinsic.eq8(s) == total / (half * (half + 1) // 2), (n, s)
+            assert intrinsic.eq8(s) == pytest.approx(
+                np.dot(np.arange(1, half + 1), d) / (half * (half + 1) // 2), abs=1e-15)
+
+
 def test_with_oldest_forgetting_reliability_changes_no_action():
     """Reliability is used only to choose what to forget: with "oldest", eq 7's scope and
     the initial reliability leave every action as it was."""
