@@ -1,4 +1,4 @@
-"""`ebrl bench`: microseconds per agent step, by part, for both robots.
+"""`ebrl bench`: microseconds per agent step, by part, for every registered robot.
 
 Each robot runs the protocol's loop (avoidance condition) until the agent's memory
 is full, then times blocks of N more steps: env.step, the agent's act and learn
@@ -7,14 +7,17 @@ Beside them, the references the issues set: raw `mujoco.mj_step` over the same
 substeps with the sensors computed once (as the tasks do), and a plain float32 numpy
 pass over a full memory (one matrix-vector product and the top-N_r selection). The
 column "tasks" is env.step less the raw physics: the tasks' own work around MuJoCo.
+"fused loop" is the protocol's own loop, `ebrl run`'s: the same steps in stretches of
+one compiled call each (experiments.fused), timed over blocks of N steps after the rest.
 """
 import statistics
 import time
 
 import mujoco
+import numpy as np
 
 from ebrl.benchmark import reference_pass
-from experiments import protocol
+from experiments import fused, protocol
 
 
 def measure(robot, steps, blocks=5):
@@ -63,12 +66,26 @@ def measure(robot, steps, blocks=5):
             mujoco.mj_sensorPos(m, d)
             m.opt.disableflags |= bit
         rows.append((clock() - t0, t_env, t_agent, whole))
+    # The protocol's own loop: stretches of steps in one compiled call (experiments.fused).
+    fused_times = []
+    if fused.Loop.supports(env, agent):
+        loop = fused.Loop(env, agent, np.empty((steps + 1, 2), dtype=np.float32))
+        observation = ts.observation
+        for _ in range(blocks):
+            done, started = 0, clock()
+            while done < steps:
+                k, goal = loop.stretch(done + 1, steps - done, observation)
+                done, observation = done + k, None
+                if goal:
+                    observation = env.reset().observation
+            fused_times.append(clock() - started)
     env.close()
     raw, t_env, t_agent, whole = (statistics.median(col) * 1e6 / steps for col in zip(*rows))
+    fused_loop = statistics.median(fused_times) * 1e6 / steps if fused_times else float("nan")
     ref = reference_pass(config.memory_size, agent.obs_dim, config.recall_size, blocks=blocks)
     return {"robot": robot, "memory": config.memory_size, "substeps": statistics.mean(substeps),
             "raw_physics": raw, "env_step": t_env, "tasks": t_env - raw, "agent": t_agent,
-            "whole_loop": whole, "reference_pass": ref}
+            "whole_loop": whole, "fused_loop": fused_loop, "reference_pass": ref}
 
 
 def main(steps=2000, blocks=5, robots=None):
@@ -76,15 +93,17 @@ def main(steps=2000, blocks=5, robots=None):
     rows = [measure(robot, steps, blocks) for robot in (robots or tuple(ROBOTS))]
     print(f"microseconds per agent step, memory full: medians of {blocks} blocks of {steps} steps")
     head = ("robot", "memory", "substeps", "raw physics", "env.step", "tasks", "env/raw",
-            "ref pass", "agent", "agent/ref", "whole loop", "loop/(raw+ref)")
+            "ref pass", "agent", "agent/ref", "whole loop", "loop/(raw+ref)", "fused loop",
+            "fused/(raw+ref)")
     print(("{:>10} " * len(head)).format(*head))
     for r in rows:
+        floor = r["raw_physics"] + r["reference_pass"]
         print(("{:>10} {:>10} {:>10.2f} {:>10.1f} {:>10.1f} {:>10.1f} {:>10.2f} {:>10.1f} "
-               "{:>10.1f} {:>10.2f} {:>10.1f} {:>10.2f}").format(
+               "{:>10.1f} {:>10.2f} {:>10.1f} {:>10.2f} {:>10.1f} {:>10.2f}").format(
             r["robot"], r["memory"], r["substeps"], r["raw_physics"], r["env_step"],
             r["tasks"], r["env_step"] / r["raw_physics"], r["reference_pass"], r["agent"],
-            r["agent"] / r["reference_pass"], r["whole_loop"],
-            r["whole_loop"] / (r["raw_physics"] + r["reference_pass"])))
+            r["agent"] / r["reference_pass"], r["whole_loop"], r["whole_loop"] / floor,
+            r["fused_loop"], r["fused_loop"] / floor))
     return rows
 
 

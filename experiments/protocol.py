@@ -191,13 +191,17 @@ def agent_input(observation, keys=("range",)):
     return obs, readings
 
 
-def execute(spec, on_step=None):
+def execute(spec, on_step=None, fused=True):
     """Runs one spec to its budget and returns its trials, trace and metrics.
 
     on_step(step, env, trace, trial_begin, trial_start, agent), if given, is called after
     every step (videos use it; agent.decision says who chose the step's action).
+    fused: where experiments.fused supports the run (EBRL, a paper fallback, no
+    on_step), run stretches of steps in one compiled call each; the same bits as the
+    step-by-step loop (tests/test_fused.py), which fused=False forces.
     """
     import tasks
+    from experiments import fused as fused_loop
 
     env_seed, _ = seeds_for(spec.seed)
     env = tasks.load(spec.entry, seed=env_seed, config=spec.task_config())
@@ -212,18 +216,28 @@ def execute(spec, on_step=None):
     pose = env.physics.robot_pose
     starts.append(pose()[:2])
     trace[0] = starts[0]
-    for step in range(1, spec.steps + 1):
-        obs, readings = agent_input(ts.observation, keys)
-        ts = env.step(agent.act(obs, readings=readings))
-        agent.learn(ts.reward, ts.last())
-        trace[step] = pose()[:2]
-        if ts.last():
-            trial_ends.append(step)
-            ts = env.reset()
-            starts.append(pose()[:2])
-        if on_step is not None:
-            on_step(step, env, trace, (trial_ends[-1] + 1) if trial_ends else 0, starts[-1],
-                    agent)
+    if fused and fused_loop.Loop.supports(env, agent, on_step):
+        loop, step, observation = fused_loop.Loop(env, agent, trace), 0, ts.observation
+        while step < spec.steps:
+            done, goal = loop.stretch(step + 1, spec.steps - step, observation)
+            step, observation = step + done, None
+            if goal:
+                trial_ends.append(step)
+                observation = env.reset().observation
+                starts.append(pose()[:2])
+    else:
+        for step in range(1, spec.steps + 1):
+            obs, readings = agent_input(ts.observation, keys)
+            ts = env.step(agent.act(obs, readings=readings))
+            agent.learn(ts.reward, ts.last())
+            trace[step] = pose()[:2]
+            if ts.last():
+                trial_ends.append(step)
+                ts = env.reset()
+                starts.append(pose()[:2])
+            if on_step is not None:
+                on_step(step, env, trace, (trial_ends[-1] + 1) if trial_ends else 0,
+                        starts[-1], agent)
     seconds = time.perf_counter() - started
     env.close()
     return {
