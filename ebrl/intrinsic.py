@@ -127,21 +127,19 @@ def avoid_into(kind, readings, theta, last, out):
 @njit(cache=True)
 def fallback_act(kind, readings, random, add, theta, last, out):
     """Intrinsic's action once its draws are made: `random` the random action's
-    Gaussians (empty: the uniform draw was not below the rate), so out = the avoidance
+    Gaussians (clipped here, in place; empty: the uniform draw was not below the
+    rate), so out = the avoidance
     (avoid_into), or the random action clipped, or with add the two summed and clipped;
     `last`, when not empty, becomes the action. Returns True for the random action."""
     if random.shape[0] == 0:
         avoid_into(kind, readings, theta, last, out)
-    else:
-        if add:
-            avoid_into(kind, readings, theta, last, out)
-            for i in range(out.shape[0]):
-                v = random[i]
-                v = v if v > -1.0 else -1.0
-                out[i] = out[i] + (v if v < 1.0 else 1.0)
-        else:
-            out[:] = random
+    elif add:
+        clip_unit(random)  # random_action's clip, then the sum's
+        avoid_into(kind, readings, theta, last, out)
+        out += random
         clip_unit(out)
+    else:
+        out[:] = clip_unit(random)
     if last.shape[0]:
         last[:] = out
     return random.shape[0] > 0

@@ -31,6 +31,8 @@ from numba import njit
 
 from ebrl import intrinsic
 from ebrl import kernels as agent_kernels
+from ebrl.agent import DECIDERS
+from experiments import protocol
 from tasks import kernels as task_kernels
 
 #: Doubles of the task's stream drawn per stretch; a step uses about a dozen.
@@ -122,7 +124,7 @@ def _fallback(kind, readings, rng, rate, sd, add, theta, last, action):
 
 
 @njit(cache=True)
-def run(steps, floating, agent, act_args, learn_args, fallback, task, physics, bump,
+def run(steps, floating, scale, agent, act_args, learn_args, fallback, task, physics, bump,
         stream, io, trace, first):
     """Up to `steps` protocol steps from the current state, stopping after a step that
     reaches the goal (GOAL), before a step the task's buffered draws might not cover
@@ -137,7 +139,8 @@ def run(steps, floating, agent, act_args, learn_args, fallback, task, physics, b
     qvel, substeps = [count]); physics: Physics.kernel_args; bump: Physics.bump_args or
     None's stand-in; stream: (buffer, cursor, cache); io: (obs, codes, velocity, action,
     env action, u, z, vz, status = [code]): codes and velocity hold the last
-    observation, obs the agent's input (the range codes over 255, then the velocity)."""
+    observation, obs the agent's input (the range codes times `scale`, then the
+    velocity: protocol.agent_input's)."""
     rng, exploration, actions, decided, flag_decisions, counts = agent
     kind, rate, sd, add, theta, last = fallback
     sensor_noise, velocity_noise, plan, act, velocity6, qvel, substeps = task
@@ -145,7 +148,6 @@ def run(steps, floating, agent, act_args, learn_args, fallback, task, physics, b
     obs, codes, velocity, action, env_action, u, z, vz, status_out = io
     m, d, flags, ctrl, qpos, xpos, xmat, sensordata, bad_qacc, ints, floats = physics
     n_codes = codes.shape[0]
-    scale = 1.0 / 255.0
     for k in range(steps):
         if not _task_draws(buf, cursor, cache, sensor_noise, velocity_noise, u, z, vz):
             return k, REFILL
@@ -251,6 +253,7 @@ class Loop:
         task, physics = env.task, env.physics
         self.env, self.agent, self.trace = env, agent, trace
         self.floating = isinstance(task, tasks.floating.Floating)
+        self.scale = protocol._reading_scale()
         config = task.config
         velocity_noise = float(config.velocity_noise) if self.floating else 0.0
         self.counts = np.zeros(8, dtype=np.int64)
@@ -309,7 +312,7 @@ class Loop:
         try:
             while why == REFILL and done < steps:
                 self.stream.fill()
-                k, why = run(steps - done, self.floating, agent_args, agent._act_args,
+                k, why = run(steps - done, self.floating, self.scale, agent_args, agent._act_args,
                              agent._learn_args, self.fallback, self.task_args,
                              physics.kernel_args, self.bump,
                              (self.stream.buffer, self.stream.cursor, self.stream.cache),
@@ -321,12 +324,11 @@ class Loop:
             agent.memory_decisions, agent.fallback_decisions = int(counts[4]), int(counts[5])
             physics.substeps = int(self.substeps[0])
             env._step_count += done
-            deciders = ebrl_deciders()
             if counts[6] >= 0:
-                agent.decision = deciders[counts[6]]
+                agent.decision = DECIDERS[counts[6]]
                 agent.used_memory = bool(counts[6] == MEMORY)
             if counts[7] >= 0 and type(agent.fallback) is intrinsic.Intrinsic:
-                agent.fallback.choice = deciders[counts[7]]
+                agent.fallback.choice = DECIDERS[counts[7]]
         if why == FAILED:
             physics.raise_for(int(self.status[0]))
         goal = why == GOAL
@@ -336,7 +338,3 @@ class Loop:
             agent.end_episode()
         return done, goal
 
-
-def ebrl_deciders():
-    from ebrl.agent import DECIDERS
-    return DECIDERS

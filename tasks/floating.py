@@ -65,7 +65,6 @@ class Physics(navigation.Physics):
         else:
             k[kernels.I_DOF_X] = m.jnt_dofadr[self.base_joints["x"]]
             k[kernels.I_DOF_Y] = m.jnt_dofadr[self.base_joints["y"]]
-        self.bump = None
         #: What the bump readings' coast works on (tasks.kernels.bump_phase): the contact
         #: count and array, and scratch for the state before a substep and the normal.
         self.bump_args = (kernels.contact_count(data.ptr), *kernels.contact_views(data.ptr),
@@ -75,7 +74,6 @@ class Physics(navigation.Physics):
         """The bump reading applied after each substep: "stop" or "bounce" (with the
         share of the speed into the wall that it reflects); anything else leaves a wall
         to the contact's physics ("grip", "slide")."""
-        self.bump = bump if bump in ("stop", "bounce") else None
         self._kints[kernels.I_BUMP] = {"stop": kernels.BUMP_STOP,
                                        "bounce": kernels.BUMP_BOUNCE}.get(bump, kernels.BUMP_PHYSICS)
         self._kfloats[kernels.F_RESTITUTION] = restitution
@@ -84,9 +82,8 @@ class Physics(navigation.Physics):
         """Substeps; with "stop" or "bounce", a substep that brings the bumper into a wall
         while moving towards it is undone (no contact forces act, nothing sinks in), and
         the velocity becomes 0 ("stop") or its mirror image off the wall ("bounce", the
-        part into the wall scaled by the restitution)."""
-        if self.bump is None:
-            return super().step(nstep)
+        part into the wall scaled by the restitution); with the others, the substeps as
+        navigation.Physics.step runs them."""
         (m, d, _, _, qpos, _, xmat, _, bad_qacc, ints, floats) = self.kernel_args
         status = kernels.bump_phase(m, d, nstep, bad_qacc, xmat, qpos, self._qvel, ints,
                                     floats, self.bump_args)
