@@ -13,7 +13,8 @@ import signal
 import sys
 import threading
 
-from experiments import paper, validate
+from experiments import paper
+from experiments.checks import validate
 
 USAGE_ERROR = 2
 RUNS_FAILED = 1
@@ -137,7 +138,7 @@ def _comparison(text):
 
 
 def build_parser():
-    from experiments.protocol import AGENTS
+    from experiments.running.protocol import AGENTS
     p = _Parser(prog="ebrl", description=__doc__)
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
@@ -171,7 +172,7 @@ def build_parser():
                           "copy the figures to --figures and summary.json beside it")
     rep.add_argument("--figures", type=pathlib.Path, default=pathlib.Path("docs/figures"))
 
-    from experiments.rendering import PATH_STYLES
+    from experiments.outputs.rendering import PATH_STYLES
     v = sub.add_parser("render", help="an offscreen MP4 of one run, or of two side by side")
     _robot_args(v, None, several=False)
     v.add_argument("--camera", default="top",
@@ -364,7 +365,7 @@ def _check_behaviour(args, overrides=()):
     """--behaviour FILE: the genome for the selected robots (None without it)."""
     if args.behaviour is None:
         return None
-    from experiments import evolve
+    from experiments.studies import evolve
     return evolve.check_genome(args.behaviour, _selected_robots(args), args.drive, overrides)
 
 
@@ -376,7 +377,7 @@ def _check_backend(backend):
 
 def _report_if_any(folder, ran):
     """Rebuilds the report unless every run of this command failed and none is on disk."""
-    from experiments import report
+    from experiments.outputs import report
     return report.build(folder) if ran.made or ran.on_disk else None
 
 
@@ -404,7 +405,7 @@ def _run_summary(ran, path):
 
 def _plan(args, overrides=()):
     """The specs that --robot, --condition, --seeds and --steps select."""
-    from experiments import runner
+    from experiments.running import runner
     conditions = paper.CONDITIONS if args.condition == "all" else (args.condition,)
     return runner.plan(_selected_robots(args), conditions, args.seeds, args.steps, overrides,
                        args.drive, getattr(args, "agent", "ebrl"))
@@ -433,7 +434,7 @@ def cmd_run(args):
         genome = _check_behaviour(args, args.set)
     except ValueError as e:
         return _fail(str(e))
-    from experiments import results, runner
+    from experiments.running import results, runner
     specs = _plan(args, args.set)
     if genome is not None:
         import dataclasses
@@ -456,7 +457,8 @@ def cmd_report(args):
             validate.output_folder(args.figures, "--figures")
     except ValueError as e:
         return _fail(str(e))
-    from experiments import report, results
+    from experiments.outputs import report
+    from experiments.running import results
     try:
         path = report.build(args.dir)
         if args.results is not None:
@@ -483,7 +485,8 @@ def cmd_evolve_report(args):
             validate.output_file(args.results, "--results")
     except ValueError as e:
         return _fail(str(e))
-    from experiments import evolved, results
+    from experiments.studies import evolved
+    from experiments.running import results
     try:
         path = evolved.write(args.evolve, args.hand, args.evolved, args.out, args.figures,
                              args.results)
@@ -526,7 +529,8 @@ def cmd_render(args):
         genome = _check_behaviour(args, args.set)
     except ValueError as e:
         return _fail(str(e))
-    from experiments import protocol, rendering
+    from experiments.running import protocol
+    from experiments.outputs import rendering
     paper_first = args.compare is not None and args.compare[0] == "behaviour"
     specs = [protocol.RunSpec(args.robot, condition, args.seed, args.steps, tuple(sorted(pairs)),
                               drive=args.drive,
@@ -550,7 +554,7 @@ def cmd_render(args):
 
 
 def cmd_bench(args):
-    from experiments import bench
+    from experiments.checks import bench
     bench.main(args.steps, args.blocks, args.robot)
     return 0
 
@@ -560,7 +564,7 @@ def cmd_check(args):
         _check_robots(args)
     except ValueError as e:
         return _fail(str(e))
-    from experiments import robotcheck
+    from experiments.checks import robotcheck
     return robotcheck.main(args.robot, args.actions, args.accuracy_actions, args.drive)
 
 
@@ -595,7 +599,8 @@ def cmd_sweep(args):
             validate.results_folder(args.baseline, "--baseline")
     except ValueError as e:
         return _fail(str(e))
-    from experiments import report, results, runner
+    from experiments.outputs import report
+    from experiments.running import results, runner
     plans = [(args.out / f"{args.param}_{v}", _plan(args, [(n, v)])) for n, v in values]
     failed = []
     try:
@@ -645,7 +650,7 @@ DEMO_VIDEO_STEPS = 3_000
 
 
 def cmd_ablate(args):
-    from experiments import ablation
+    from experiments.studies import ablation
     try:
         _check_robots(args)
         names = [r.name for r in ablation.READINGS] if args.readings == "all" else \
@@ -669,7 +674,7 @@ def cmd_ablate(args):
             validate.output_file(args.results, "--results")
     except (ValueError, argparse.ArgumentTypeError) as e:
         return _fail(str(e))
-    from experiments import results
+    from experiments.running import results
     readings = [ablation.BY_NAME[n] for n in names]
     try:
         cell_runs, failed = ablation.run(args.out, _selected_robots(args), args.seeds,
@@ -689,7 +694,7 @@ MAX_POPULATION = 1_000
 
 def _storage_url(args):
     """--storage as an Optuna URL (checked: a writable SQLite file's folder, or a URL)."""
-    from experiments import study
+    from experiments.studies import study
     url = study.storage_url(args.storage, args.out)
     if args.storage is None:
         pass  # OUT/study.db: --out is checked by the caller
@@ -706,7 +711,7 @@ def _storage_url(args):
 
 def _fit_args(args):
     """Every `ebrl fit` argument checked before any work: (space names, storage URL)."""
-    from experiments import fit
+    from experiments.studies import fit
     names = tuple(fit.BY_NAME) if args.space == "all" else \
         tuple(n.strip() for n in args.space.split(",") if n.strip())
     unknown = [n for n in names if n not in fit.BY_NAME]
@@ -738,7 +743,8 @@ def cmd_fit(args):
         names, url = _fit_args(args)
     except ValueError as e:
         return _fail(str(e))
-    from experiments import fit, results, study
+    from experiments.studies import fit, study
+    from experiments.running import results
     rungs = (tuple(args.seeds),) if args.seeds == args.promote_seeds else \
         (tuple(args.seeds), tuple(args.promote_seeds))
     problem = fit.Problem(names=names, rungs=rungs, steps=args.steps)
@@ -774,7 +780,7 @@ def cmd_fit(args):
 
 def _evolve_args(args):
     """Every `ebrl evolve` argument checked before any work: (problem, storage URL)."""
-    from experiments import evolve
+    from experiments.studies import evolve
     from tasks.robots import resolve
     if args.population < 2:
         raise ValueError("--population must be at least 2 (CMA-ES keeps the better half)")
@@ -800,7 +806,8 @@ def cmd_evolve(args):
         problem, url = _evolve_args(args)
     except ValueError as e:
         return _fail(str(e))
-    from experiments import evolve, protocol, results, study
+    from experiments.studies import evolve, study
+    from experiments.running import protocol, results
     label = protocol.RunSpec(args.robot, "avoidance", 0, 1, drive=args.drive).label
     name = args.study or evolve.study_name(label, not args.no_learning)
     args.out.mkdir(parents=True, exist_ok=True)
@@ -838,7 +845,8 @@ def cmd_demo(args):
         validate.output_folder(args.out, "--out")
     except ValueError as e:
         return _fail(str(e))
-    from experiments import protocol, rendering, results, runner
+    from experiments.running import protocol, results, runner
+    from experiments.outputs import rendering
     from tasks.robots import PAPER_ROBOTS, ROBOTS
     budgets = {r: max(10_000, ROBOTS[r].budget // 5) for r in PAPER_ROBOTS}
     specs = runner.plan(PAPER_ROBOTS, paper.CONDITIONS, range(DEMO_SEEDS), budgets)

@@ -13,7 +13,8 @@ import pytest
 
 from ebrl import behaviour as genomes
 from ebrl import intrinsic
-from experiments import evolve, protocol, study
+from experiments.studies import evolve, study
+from experiments.running import protocol
 from helpers import ROOT, ebrl
 
 PAPER_FILES = {"eq8": ROOT / "behaviours" / "paper_eq8.json",
@@ -29,7 +30,7 @@ def test_paper_files_are_the_papers_rules_and_current():
         # Made by evolve.write_paper("behaviours"); rerun it if a robot's readings change.
         expected = evolve.paper_genome(entry)
         assert path.read_text() == genomes.dumps(expected), (
-            f"{path} is stale: python -c 'from experiments import evolve; "
+            f"{path} is stale: python -c 'from experiments.studies import evolve; "
             "evolve.write_paper(\"behaviours\")'")
         g = genomes.load(path)
         assert g == expected and genomes.is_paper_rule(g)

@@ -364,7 +364,7 @@ env.close()
 def test_offscreen_frame_renders_with_no_error_at_exit(backend, library):
     if not ctypes.util.find_library(library):
         pytest.skip(f"lib{library} is not installed")
-    from experiments.rendering import backend_environment
+    from experiments.outputs.rendering import backend_environment
     proc = subprocess.run([sys.executable, "-c", _RENDER], cwd=ROOT, capture_output=True,
                           text=True, timeout=120, env=backend_environment(backend))
     assert proc.returncode == 0, proc.stderr
@@ -375,7 +375,7 @@ def test_intrinsic_parameters_reach_the_fallback():
     """--set intrinsic_random_rate / random_sd must change the behaviour a run uses."""
     import tasks
     from ebrl import intrinsic
-    from experiments import protocol
+    from experiments.running import protocol
     env = tasks.load("two_wheel", seed=0)
     try:
         spec = protocol.RunSpec("two_wheel", "avoidance", 0, 100,

@@ -294,7 +294,8 @@ def test_a_study_killed_at_random_moments_is_continued_by_the_same_command(tmp_p
 
     import optuna
 
-    from experiments import fit, results, study
+    from experiments.studies import fit, study
+    from experiments.running import results
     out = tmp_path / "fit"
     rng = random.Random(21)  # the moments: random, the same on every run of the test
     kills = 0

@@ -5,7 +5,8 @@ import math
 
 import pytest
 
-from experiments import fit, paper, study
+from experiments.studies import fit, study
+from experiments import paper
 from helpers import ebrl
 
 

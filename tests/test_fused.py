@@ -1,9 +1,9 @@
-"""The protocol's compiled stretches (experiments.fused) against the step-by-step loop."""
+"""The protocol's compiled stretches (experiments.running.fused) against the step-by-step loop."""
 import numpy as np
 import pytest
 
 import tasks
-from experiments import fused, protocol
+from experiments.running import fused, protocol
 
 
 def _pair(robot, condition, seed=0):
@@ -114,7 +114,7 @@ def test_what_a_stretch_cannot_run_takes_the_step_by_step_loop():
 
 
 def test_bench_times_the_fused_loop_beside_the_step_loop():
-    from experiments import bench
+    from experiments.checks import bench
     row = bench.measure("two_wheel", 200, blocks=3)  # the median leaves out the first (loading)
     for key in ("raw_physics", "env_step", "agent", "whole_loop", "fused_loop",
                 "reference_pass"):

@@ -10,7 +10,8 @@ import pytest
 
 import tasks
 from ebrl.agent import DECIDERS
-from experiments import protocol, rendering
+from experiments.running import protocol
+from experiments.outputs import rendering
 from models import UNIT
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 import tasks
-from experiments import protocol, robotcheck, runner
+from experiments.running import protocol, runner
+from experiments.checks import robotcheck
 from helpers import ROOT, ebrl
 from tasks import navigation
 

@@ -8,7 +8,7 @@ substeps with the sensors computed once (as the tasks do), and a plain float32 n
 pass over a full memory (one matrix-vector product and the top-N_r selection). The
 column "tasks" is env.step less the raw physics: the tasks' own work around MuJoCo.
 "fused loop" is the protocol's own loop, `ebrl run`'s: the same steps in stretches of
-one compiled call each (experiments.fused), timed over blocks of N steps after the rest.
+one compiled call each (experiments.running.fused), timed over blocks of N steps after the rest.
 """
 import statistics
 import time
@@ -17,7 +17,7 @@ import mujoco
 import numpy as np
 
 from ebrl.benchmark import reference_pass
-from experiments import fused, protocol
+from experiments.running import fused, protocol
 
 
 def measure(robot, steps, blocks=5):
@@ -66,7 +66,7 @@ def measure(robot, steps, blocks=5):
             mujoco.mj_sensorPos(m, d)
             m.opt.disableflags |= bit
         rows.append((clock() - t0, t_env, t_agent, whole))
-    # The protocol's own loop: stretches of steps in one compiled call (experiments.fused).
+    # The protocol's own loop: stretches of steps in one compiled call (experiments.running.fused).
     fused_times = []
     if fused.Loop.supports(env, agent):
         loop = fused.Loop(env, agent, np.empty((steps + 1, 2), dtype=np.float32))

@@ -196,12 +196,12 @@ def execute(spec, on_step=None, fused=True):
 
     on_step(step, env, trace, trial_begin, trial_start, agent), if given, is called after
     every step (videos use it; agent.decision says who chose the step's action).
-    fused: where experiments.fused supports the run (EBRL, a paper fallback, no
+    fused: where experiments.running.fused supports the run (EBRL, a paper fallback, no
     on_step), run stretches of steps in one compiled call each; the same bits as the
     step-by-step loop (tests/test_fused.py), which fused=False forces.
     """
     import tasks
-    from experiments import fused as fused_loop
+    from experiments.running import fused as fused_loop
 
     env_seed, _ = seeds_for(spec.seed)
     env = tasks.load(spec.entry, seed=env_seed, config=spec.task_config())

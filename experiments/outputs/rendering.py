@@ -361,7 +361,7 @@ def record(spec, path, *, frames=600, fps=FPS, camera="top", beams=True, path_st
     overlays chosen (see the module's docstring); at most about `frames` frames. Returns
     the run's result (protocol.execute's) with `decisions`, who chose each step's action
     (indices of `decider_names`)."""
-    from experiments import protocol
+    from experiments.running import protocol
     explainer = Explainer(spec, every=_every(spec, frames), camera=camera, label=label,
                           beams=beams, path=path_style, caption=caption)
     writer = _writer(path, fps, quality)
@@ -385,7 +385,7 @@ def record_compare(specs, labels, path, *, frames=600, fps=FPS, camera="top", be
     """Two runs side by side in one MP4: specs[0] on the left, specs[1] on the right, a
     frame of each at the same steps (the specs must have the same number of steps). The
     left run is recorded first to a temporary file, read back beside the right one."""
-    from experiments import protocol
+    from experiments.running import protocol
     left, right = specs
     if left.steps != right.steps:
         raise ValueError("the two runs of a comparison must have the same number of steps")

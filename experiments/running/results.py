@@ -22,7 +22,8 @@ import traceback
 
 import numpy as np
 
-from experiments import paper, protocol
+from experiments import paper
+from experiments.running import protocol
 
 BOOTSTRAP_SAMPLES = 10_000
 BOOTSTRAP_SEED = 20000  # the paper's year: any fixed number makes summaries reproducible
@@ -265,7 +266,7 @@ def trial_paths(trace, starts, trial_ends):
 def robot_order(label):
     """Group labels ("robot" or "robot.agent") in the registry's order of robots, then
     by learner (EBRL first); robots not in the registry after them."""
-    from experiments.protocol import AGENTS
+    from experiments.running.protocol import AGENTS
     from tasks.robots import ROBOTS
     names = list(ROBOTS)
     robot, _, agent = label.partition(".")

@@ -1,9 +1,9 @@
 """One study runner for `ebrl fit` (the readings against the paper's table) and `ebrl
 evolve`: an Optuna study in a storage URL (SQLite by default), asked and told in batches,
-every trial's runs made by experiments.runner (so --workers and --backend ray work) and
+every trial's runs made by experiments.running.runner (so --workers and --backend ray work) and
 written to disk as `ebrl run` writes them.
 
-A problem (experiments.fit.Problem, say) gives four things: its search space (Optuna
+A problem (experiments.studies.fit.Problem, say) gives four things: its search space (Optuna
 distributions), the runs of a trial's settings on some seeds, a score of those runs (the
 value to minimise, and the figures to record), and the rungs of seeds. A trial runs on the
 first rung's seeds; a trial whose value is among the best `promote` share of the study so
@@ -32,7 +32,7 @@ import hashlib
 import json
 import pathlib
 
-from experiments import results, runner
+from experiments.running import results, runner
 
 #: The storage used when none is given: an SQLite file in the study's folder.
 DEFAULT_STORAGE = "study.db"

@@ -32,7 +32,7 @@ import signal
 import threading
 import time
 
-from experiments import protocol, results
+from experiments.running import protocol, results
 
 # One BLAS thread per worker: the agent's products are small, and parallelism
 # comes from running several seeds at once. Set before workers import numpy.

@@ -1,5 +1,5 @@
 """The protocol's loop for a stretch of a trial in one compiled call: the speed path of
-`experiments.protocol.execute`, with the same bits as its step-by-step loop.
+`experiments.running.protocol.execute`, with the same bits as its step-by-step loop.
 
 The step-by-step loop runs, per agent step, `ebrl.Agent.act`, `tasks.Environment.step`
 and `ebrl.Agent.learn`, each a little Python around compiled kernels (ebrl.kernels,
@@ -32,7 +32,7 @@ from numba import njit
 from ebrl import intrinsic
 from ebrl import kernels as agent_kernels
 from ebrl.agent import DECIDERS
-from experiments import protocol
+from experiments.running import protocol
 from tasks import kernels as task_kernels
 
 #: Doubles of the task's stream drawn per stretch; a step uses about a dozen.

@@ -6,7 +6,8 @@ import pathlib
 
 import numpy as np
 
-from experiments import paper, results
+from experiments import paper
+from experiments.running import results
 from tasks.robots import DRIVES
 
 @functools.cache
@@ -278,7 +279,7 @@ def replace_block(path, begin, end, block):
 
 
 def optimal_table(rows):
-    from experiments import optimal
+    from experiments.outputs import optimal
     return optimal.table(rows)
 
 
@@ -299,7 +300,7 @@ def build(root):
     first_vs_learned_figure(summary, figures / "first_vs_learned.png")
     extra = []
     try:
-        from experiments import optimal
+        from experiments.outputs import optimal
         summary["optimal"] = optimal.yardstick(runs, root)
         extra = ["", "## Against the optimal path", "", optimal.table(summary["optimal"])]
     except ImportError:

@@ -75,7 +75,7 @@ def fraction(text, option):
 
 def _setting_classes():
     """The config classes whose fields --set may name: every learner's, then the task's."""
-    from experiments import protocol
+    from experiments.running import protocol
     from tasks.config import TaskConfig
     return [protocol.agent_classes(a)[0] for a in protocol.AGENTS] + [TaskConfig]
 
@@ -131,7 +131,7 @@ def agent_configs(robots, overrides, drive=None, agent="ebrl"):
     not have, or a value their configs refuse, stops the command before any run."""
     import dataclasses
 
-    from experiments import protocol
+    from experiments.running import protocol
     from tasks.config import TaskConfig
     overrides = dict(overrides)
     size = overrides.get("memory_size")

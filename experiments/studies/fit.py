@@ -5,7 +5,7 @@ plus the continuous readings the paper leaves open; Table 1, the room, the range
 (range 14, noise sd 12.75, 7 and 8 of them) and the actions' maxima stay fixed. A reading
 of the agent (ebrl.Config) is shared by both robots; a reading of the floating drive
 applies to the floating robot only, so the two-wheel runs of two trials that differ only
-there are the same runs (made once; experiments.study).
+there are the same runs (made once; experiments.studies.study).
 
 The objective (objective()) is the distance of a trial's Section 3.6 figures to the
 paper's, one term per figure, plus a penalty per failing claim (report.claims):
@@ -23,7 +23,10 @@ import math
 import pathlib
 
 from ebrl.config import READINGS as AGENT_READINGS
-from experiments import paper, report, results, study
+from experiments import paper
+from experiments.outputs import report
+from experiments.running import results
+from experiments.studies import study
 from tasks.config import BUMPS, THRUSTS, VELOCITY_CODES
 
 STUDY_NAME = "fit"
@@ -84,7 +87,7 @@ def default(name, robot="floating"):
     else the config's field; the file's radius 1.5 and friction 1 where that is None).
     The search's subject is the floating robot: its defaults are trial 0 and the text
     of a trial's readings; a setting shared by both robots is run as given on each."""
-    from experiments import validate
+    from experiments.checks import validate
     from tasks.robots import resolve
     value = validate.setting_default(name, [resolve(robot)])
     return {"radius": 1.5, "wall_friction": 1.0}.get(name, value) if value is None else value
@@ -102,7 +105,7 @@ def overrides(params, robot):
 
 @dataclasses.dataclass
 class Problem:
-    """`ebrl fit` for experiments.study: the space, a trial's runs, its score."""
+    """`ebrl fit` for experiments.studies.study: the space, a trial's runs, its score."""
     names: tuple = tuple(BY_NAME)
     rungs: tuple = ((0, 1), tuple(range(6)))
     steps: int = None  # None: each robot's budget
@@ -111,7 +114,7 @@ class Problem:
         return {n: BY_NAME[n].distribution() for n in self.names}
 
     def specs(self, params, seeds):
-        from experiments import runner
+        from experiments.running import runner
         out = []
         for robot in ROBOTS:
             out += runner.plan((robot,), paper.CONDITIONS, seeds, self.steps,
@@ -182,7 +185,7 @@ def validate_best(problem, trial_params, out, seeds, workers=None, backend="loca
                   progress=True):
     """Runs a trial's settings and the defaults on seeds (full budgets, never used by
     the search); writes and returns validation.json's content."""
-    from experiments import runner
+    from experiments.running import runner
     where = lambda spec: study.run_folder(out, spec)  # noqa: E731
     rows = {}
     plans = {"best": problem.specs(trial_params, seeds), "defaults": problem.specs({}, seeds)}
@@ -352,7 +355,7 @@ def write(s, out, names):
              "Objective: the mean over the twelve Section 3.6 figures of (log(ours / paper) / "
              "scale)^2, scale = log(1 + sd / mean) of the paper's figure (the shrinks: "
              f"{SHRINK_SCALE}), plus {CLAIM_PENALTY:g} per failing claim "
-             "(experiments/fit.py). Lower is closer to the paper.", "",
+             "(experiments/studies/fit.py). Lower is closer to the paper.", "",
              "The space: " + "; ".join(f"`{p.name}` ({p.what}; "
                                        + ("/".join(map(str, p.values)) if p.kind == "choice"
                                           else f"{p.values[0]}-{p.values[1]}")

@@ -13,7 +13,9 @@ import json
 import pathlib
 
 from ebrl.config import READINGS as AGENT_READINGS
-from experiments import paper, report, results, runner
+from experiments import paper
+from experiments.outputs import report
+from experiments.running import results, runner
 from tasks.config import BUMPS
 
 
@@ -65,7 +67,7 @@ def _is_default(changes, robot):
     """Whether every change is already the robot's default (its readings, else the
     config's field): such a cell is the default's cell for that robot."""
     from tasks.robots import resolve
-    from experiments import validate
+    from experiments.checks import validate
     entry = resolve(robot)
     return all(validate.setting_default(name, [entry]) == value for name, value in changes)
 
@@ -149,7 +151,7 @@ def _row(cell, g):
 def _defaults(name):
     """A reading's default, per paper robot where they differ: 'keep (floating), zero'."""
     from tasks.robots import PAPER_ROBOTS, ROBOTS
-    from experiments import validate
+    from experiments.checks import validate
     values = {r: validate.setting_default(name, [ROBOTS[r]]) for r in PAPER_ROBOTS}
     if len(set(map(str, values.values()))) == 1:
         return next(iter(values.values()))

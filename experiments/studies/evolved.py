@@ -19,7 +19,9 @@ import functools
 import pathlib
 
 from ebrl import behaviour as genomes
-from experiments import report, results, study
+from experiments.outputs import report
+from experiments.running import results
+from experiments.studies import study
 
 #: The paper's robots whose behaviours are evolved, and the 3D robot each transfers to.
 PLANAR = ("two_wheel", "floating")
@@ -104,7 +106,7 @@ def comparison_table(rows, robots):
 
 def genome_table(evolve_dir, robot):
     """The paper's genome beside the two evolved ones, field by field."""
-    from experiments import evolve
+    from experiments.studies import evolve
     from tasks.robots import ROBOTS
     cols = [("the paper's rule", evolve.paper_genome(ROBOTS[robot]))]
     for label, name in (("for the learner", evolve.study_name(robot)),
@@ -134,7 +136,7 @@ def fitness_lines(evolve_dir, robot, figures):
     """The studies' settings, first and best fitness, and their figures (under figures)."""
     import optuna
 
-    from experiments import evolve
+    from experiments.studies import evolve
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     storage = study.storage_url(None, evolve_dir)
     lines = []
@@ -240,7 +242,7 @@ def write(evolve_dir, hand, evolved, out, figures, results_md=None):
     pathlib.Path(figures).mkdir(exist_ok=True)  # its parent exists (validate.output_folder)
     body = build(evolve_dir, hand, evolved, figures)
     text = "\n".join(["# Evolved intrinsic behaviours (Section 4's proposal)", "",
-                      "Made by `ebrl evolve-report` (experiments/evolved.py) from "
+                      "Made by `ebrl evolve-report` (experiments/studies/evolved.py) from "
                       f"`{evolve_dir}`, `{hand}` and `{evolved}`.", "", body, ""])
     results.atomic_write(pathlib.Path(out), text)
     if results_md is not None:

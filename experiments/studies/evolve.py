@@ -1,5 +1,5 @@
 """`ebrl evolve`: CMA-ES over a robot's intrinsic behaviour (ebrl.behaviour), Section 4's
-proposal, through the study runner of `ebrl fit` (experiments.study): the same storage,
+proposal, through the study runner of `ebrl fit` (experiments.studies.study): the same storage,
 batches, resume and runs on disk; only the space and the objective differ.
 
 The space (Problem.distributions): every number of the starting genome (the paper's rule
@@ -12,7 +12,7 @@ trials is one CMA-ES generation.
 
 The fitness (Problem.score): the mean over the training seeds of the goals reached within
 the budget, EBRL learning from step 0 in the avoidance condition as in the protocol
-(experiments.protocol.execute); the study minimises its negative. Why goals rather than
+(experiments.running.protocol.execute); the study minimises its negative. Why goals rather than
 steps per trial: goals are defined for every run, also one that never reaches the goal
 (steps per trial would have to drop such a seed, rewarding a behaviour that fails on it,
 or invent a penalty); they are the return the learner maximises (the cumulative reward
@@ -30,7 +30,9 @@ import math
 import pathlib
 
 from ebrl import behaviour as genomes
-from experiments import report, results, study
+from experiments.outputs import report
+from experiments.running import results
+from experiments.studies import study
 
 #: The search's radius of each field (of a vector's every entry) around the starting
 #: genome: each number is searched in [start - radius, start + radius], so CMA-ES's mean
@@ -104,7 +106,7 @@ def check_genome(path, robots, drive=None, overrides=()):
 def paper_genome(entry):
     """The paper's rule for a robot's drive as a genome, with the robot's readings of the
     learning variables and the dead zone (its agent config, protocol.RunSpec)."""
-    from experiments.protocol import RunSpec
+    from experiments.running.protocol import RunSpec
     from tasks.robots import ROBOTS
     drive = None if entry.name in ROBOTS else entry.drive  # a robot file: its drive
     config = RunSpec(entry.name, CONDITION, 0, 1, drive=drive).agent_config()
@@ -118,7 +120,7 @@ PAPER_FILE_ROBOTS = ("two_wheel", "floating")
 def write_paper(folder):
     """The paper's rules, with the paper's robots' readings, as behaviour files,
     FOLDER/paper_<behaviour>.json (the shipped behaviours/ folder is made so:
-    `python -c 'from experiments import evolve; evolve.write_paper("behaviours")'`;
+    `python -c 'from experiments.studies import evolve; evolve.write_paper("behaviours")'`;
     tests/test_evolve.py checks it is current)."""
     from tasks.robots import ROBOTS
     folder = pathlib.Path(folder)
@@ -139,7 +141,7 @@ def range_beams(entry):
 
 @dataclasses.dataclass
 class Problem:
-    """`ebrl evolve` for experiments.study: the space, a trial's runs, its fitness."""
+    """`ebrl evolve` for experiments.studies.study: the space, a trial's runs, its fitness."""
     robot: str
     start: object                  # the starting genome (ebrl.behaviour)
     names: tuple                   # the genome fields searched
@@ -174,7 +176,7 @@ class Problem:
         return genomes.with_flat(self.start, clipped)
 
     def specs(self, params, seeds):
-        from experiments import runner
+        from experiments.running import runner
         genome = self.genome(params)
         overrides = () if self.learning else NO_LEARNING
         return [dataclasses.replace(s, behaviour=genome) for s in
@@ -285,7 +287,7 @@ def write(s, out, problem):
              f"Robot {problem.robot}, {'EBRL learning' if problem.learning else 'no learning (the behaviour alone)'}"
              f", seeds {', '.join(map(str, problem.seeds))}, "
              f"{problem.steps or 'the robot budget'} steps a run, population {problem.population}. "
-             "Fitness: mean goals within the budget over those seeds (experiments/evolve.py).", "",
+             "Fitness: mean goals within the budget over those seeds (experiments/studies/evolve.py).", "",
              "| generation | trials | best goals | mean goals | best so far |",
              "|---:|---:|---:|---:|---:|"]
     for g, n, b, m, so_far in fitness_rows(s):

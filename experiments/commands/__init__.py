@@ -1,0 +1,1 @@
+"""One module per `ebrl` command (listed by experiments.cli)."""
