@@ -30,20 +30,49 @@ ebrl.kernels.learn, on the arrays this class holds; the agent's random stream is
 exploration draw per act, then the fallback's draws when the fallback acts.
 """
 import math
+import types
 
 import numpy as np
+from numba import njit
 
-from ebrl import kernels
+from ebrl import intrinsic, kernels
 from ebrl.config import Config, reading_code
-from ebrl.kernels import eq1, eq5
+from ebrl.kernels import DECIDERS, EXPLORATION, FALLBACK, INVALID, eq1, eq5
 from ebrl.similarity import modalities
 
-__all__ = ["Agent", "DECIDERS", "eq1", "eq5"]
+__all__ = ["Agent", "DECIDERS", "act_step", "trial_end", "eq1", "eq5"]
 
-#: Who chose an action (Agent.decision): the memory (eq 5); the fallback's intrinsic
-#: behaviour or its random action (its `choice`, "fallback" for one without); or the
-#: exploration draw, which handed to the fallback a step the memory would have taken.
-DECIDERS = ("memory", "intrinsic", "random", "exploration")
+
+@njit(cache=True)
+def act_step(s, f, x, readings):
+    """One act of an agent with a compiled fallback: kernels.act_memory on the agent's
+    record s, then, where the memory does not choose, the fallback's step (record f,
+    ebrl.intrinsic.fallback_step) on the agent's stream. Returns who chose (an index of
+    DECIDERS), or INVALID with nothing changed. Agent.act calls it; so does a compiled
+    loop, step after step."""
+    element = kernels.act_memory(s, x)
+    if element == INVALID:
+        return INVALID
+    if element == FALLBACK:
+        chose = intrinsic.fallback_step(f, readings, s.rng, s.action)
+        if s.decider != EXPLORATION:
+            s.decider = chose
+    return s.decider
+
+
+@njit(cache=True)
+def trial_end(s, f):
+    """A trial's end for an agent with a compiled fallback: kernels.end_trial on the
+    agent's record s, then the fallback's reset (record f)."""
+    kernels.end_trial(s)
+    intrinsic.fallback_reset(f)
+
+
+def invalid_observation(x):
+    """The error for an observation the act kernel refuses (kernels.INVALID)."""
+    if not np.isfinite(x).all():
+        return ValueError("observation contains NaN or inf")
+    return ValueError("observation too large: |x|^2 overflows")
 
 
 class Agent:
@@ -56,87 +85,110 @@ class Agent:
         self.config, self.fallback = config, fallback
         self.obs_dim, self.action_dim = n, _ = int(obs_dim), int(action_dim)
         self.rng = np.random.default_rng(seed)
-        M = config.memory_size
+        M, c = config.memory_size, config
         # Modalities (eq 3-4): each component's group, each group's size and weight.
-        group_of, self._group_size, self._group_weight = modalities(n, groups, group_weights)
-        self._group_of = group_of.astype(np.int64)
-        # Memory (2.1), laid out as ebrl.kernels describes.
-        self._inputs = np.zeros((n, M))
-        self._action = np.zeros((M, self.action_dim))
-        self._utility = np.zeros(M)
-        self._rel = np.zeros(M)
-        self._time = np.zeros(M, dtype=np.int64)
-        self._next = np.full(M, -1, dtype=np.int64)
-        self._prev = np.full(M, -1, dtype=np.int64)
-        self._size = 0
-        self._sums = np.zeros((2, n))  # running sums of x and x^2, for eq 2's V_i
-        self._var = np.full(n, float(config.variance_floor))  # eq 2's V_i
-        self._sim = np.zeros(M)  # the current input's similarities (act's scratch)
-        self._decided = np.zeros(M, dtype=np.bool_)  # used for a decision this trial (eq 7)
-        # Recall table (2.2), the episode being recorded, the last decision.
-        self._table = np.full(config.recall_size, -1, dtype=np.int64)  # -1: empty
-        self._table_w = np.zeros(config.recall_size)
-        self._tail = -1        # the current episode's latest element
-        self._referred = -1    # the trial's latest element used for a decision (eq 7)
-        # The switches acting here (ebrl.config.READINGS; the kernels get ints).
-        self._continuing = config.episode == "continuing"
-        self._keep_recall = config.recall_at_trial_end == "keep"
-        self._flag_decisions = config.eq7_scope == "decided_only"
-        self._obs = None  # the last act's input and action, until learn stores them
-        self._act = None
-        # The kernels' other arguments, in their order: the arrays above (updated in
-        # place, never rebound) and config values as floats (so one compiled version
-        # serves every config).
-        c = config
-        self._exploration = float(c.exploration_rate)
-        self._act_args = (self._inputs, self._var, self._group_of, self._group_size,
-                          self._group_weight, self._sim, self._next, self._table,
-                          self._table_w, self._utility, float(c.alpha),
-                          float(c.policy_threshold))
-        self._learn_args = (self._inputs, self._sums, self._var, self._action,
-                            self._utility, self._rel, self._time, self._next, self._prev,
-                            self._table, self._table_w, float(c.variance_floor),
-                            float(c.initial_utility), float(c.initial_reliability),
-                            float(c.discount), float(c.utility_cutoff),
-                            float(c.reliability_rate), float(c.time_discount),
-                            self._decided, reading_code("eq7_scope", c.eq7_scope),
-                            reading_code("forgetting", c.forgetting))
-        self.steps = 0
-        self.used_memory = False
-        self.memory_decisions = 0
-        self.fallback_decisions = 0
-        #: Who chose the last act's action, one of DECIDERS (videos colour by it).
-        self.decision = None
+        group_of, group_size, group_weight = modalities(n, groups, group_weights)
+        #: The memory as ebrl.kernels lays it out (2.1, eq 2's sums), the recall table
+        #: (2.2), the act's scratch and the last act's input and action: numpy arrays,
+        #: the very ones the compiled record holds.
+        self.memory = types.SimpleNamespace(
+            group_of=group_of.astype(np.int64), group_size=group_size,
+            group_weight=group_weight, inputs=np.zeros((n, M)), sums=np.zeros((2, n)),
+            variance=np.full(n, float(c.variance_floor)), sim=np.zeros(M),
+            actions=np.zeros((M, self.action_dim)), utility=np.zeros(M), rel=np.zeros(M),
+            time=np.zeros(M, dtype=np.int64), nxt=np.full(M, -1, dtype=np.int64),
+            prev=np.full(M, -1, dtype=np.int64), decided=np.zeros(M, dtype=np.bool_),
+            table=np.full(c.recall_size, -1, dtype=np.int64), table_w=np.zeros(c.recall_size),
+            obs=np.zeros(n), action=np.zeros(self.action_dim))
+        #: The agent as one record for compiled code (ebrl.kernels.AgentRecord): the
+        #: config's numbers, the stream, the arrays above, the counters.
+        self.record = kernels.AgentRecord(
+            self.rng, float(c.exploration_rate), float(c.alpha), float(c.policy_threshold),
+            float(c.variance_floor), float(c.initial_utility), float(c.initial_reliability),
+            float(c.discount), float(c.utility_cutoff), float(c.reliability_rate),
+            float(c.time_discount), reading_code("eq7_scope", c.eq7_scope),
+            reading_code("forgetting", c.forgetting), c.eq7_scope == "decided_only",
+            c.episode == "continuing", c.recall_at_trial_end == "keep",
+            *(getattr(self.memory, name) for name in kernels.AGENT_ARRAYS),
+            False, 0, -1, -1, 0, 0, 0, -1)
+        # The compiled fallbacks (ebrl.intrinsic's) draw from the agent's stream.
+        self.fallback_record = None
+        if getattr(fallback, "record", None) is not None:
+            fallback.bind(self.rng)
+            self.fallback_record = fallback.record
+        #: True when the fallback is compiled (ebrl.intrinsic's RandomWalk or Intrinsic with
+        #: the paper's avoidance): a whole step is then compiled code (act_step, trial_end).
+        self.compiled = (type(fallback) in (intrinsic.RandomWalk, intrinsic.Intrinsic)
+                          and fallback.compiled)
+        self._action = self.memory.action
 
     # -- read-outs -----------------------------------------------------------------
     @property
     def size(self):
-        return self._size
+        return kernels.counters(self.record)[0]
+
+    @property
+    def tail(self):
+        """The current episode's latest element (-1: none)."""
+        return kernels.counters(self.record)[1]
+
+    @property
+    def referred(self):
+        """The trial's latest element used for a memory decision (eq 7's start; -1: none)."""
+        return kernels.counters(self.record)[2]
+
+    @property
+    def steps(self):
+        """Steps learnt so far."""
+        return kernels.counters(self.record)[3]
+
+    @property
+    def memory_decisions(self):
+        return kernels.counters(self.record)[4]
+
+    @property
+    def fallback_decisions(self):
+        return kernels.counters(self.record)[5]
+
+    @property
+    def decision(self):
+        """Who chose the last act's action, one of DECIDERS (videos colour by it); a
+        Python fallback without a choice reads "fallback"; None before any act."""
+        code = kernels.counters(self.record)[6]
+        return DECIDERS[code] if code >= 0 else self._python_choice
+
+    @property
+    def used_memory(self):
+        """True when the memory chose the last act's action."""
+        return kernels.counters(self.record)[6] == kernels.MEMORY
+
+    _python_choice = None
 
     @property
     def reliability(self):
-        return self._rel[: self._size].copy()
+        return self.memory.rel[: self.size].copy()
 
     @property
     def utility(self):
-        return self._utility[: self._size]
+        return self.memory.utility[: self.size]
 
     @property
     def variance(self):
         """eq 2's V_i over the stored inputs, kept from running sums, floored."""
-        return self._var.copy()
+        return self.memory.variance.copy()
 
     def recall_table(self):
         """(element slots, weights W) of the recall table, best first."""
-        used = self._table >= 0
-        return self._table[used].copy(), self._table_w[used].copy()
+        m = self.memory
+        used = m.table >= 0
+        return m.table[used].copy(), m.table_w[used].copy()
 
-    def _similarities(self, x):
+    def similarities(self, x):
         """eq 2-4 for x against every stored element, by the kernel act uses."""
-        out = np.zeros(self._size)
-        kernels.similarities(np.array(x, dtype=np.float64), self._inputs, self._size,
-                             self._var, self._group_of, self._group_size,
-                             self._group_weight, out)
+        m = self.memory
+        out = np.zeros(self.size)
+        kernels.similarities(np.array(x, dtype=np.float64), m.inputs, self.size, m.variance,
+                             m.group_of, m.group_size, m.group_weight, out)
         return out
 
     # -- acting --------------------------------------------------------------------
@@ -145,45 +197,28 @@ class Agent:
         x = np.array(obs, dtype=np.float64)
         if x.shape != (self.obs_dim,):
             raise ValueError(f"observation must have shape ({self.obs_dim},), got {x.shape}")
-        # eq 2-4 against the memory, the recall table (eq 1), eq 5's choice.
-        element = kernels.act(x, self._size, *self._act_args)
-        if element == kernels.INVALID:
-            if not np.isfinite(x).all():
-                raise ValueError("observation contains NaN or inf")
-            raise ValueError("observation too large: |x|^2 overflows")
-        explore = self.rng.random() < self._exploration
-        if element >= 0 and not explore:
-            action = self._action[element].copy()
-            self._referred = element
-            if self._flag_decisions:
-                self._decided[element] = True
-            self.used_memory = True
-            self.memory_decisions += 1
-            self.decision = "memory"
-        else:
-            action = np.array(self.fallback(x if readings is None else readings, self.rng),
-                              dtype=np.float64).reshape(self.action_dim)
-            self.used_memory = False
-            self.fallback_decisions += 1
-            self.decision = ("exploration" if element >= 0
-                             else getattr(self.fallback, "choice", "fallback"))
-        self._obs, self._act = x, action
-        return action
+        given = x if readings is None else np.ascontiguousarray(readings, dtype=np.float64)
+        if self.compiled:  # eq 2-4, eq 1, eq 5, the exploration draw, the fallback
+            code = act_step(self.record, self.fallback_record, x, given)
+        else:  # the same, with a Python fallback
+            code = kernels.act_memory(self.record, x)
+            if code == FALLBACK:
+                self._action[:] = np.array(self.fallback(given, self.rng),
+                                           dtype=np.float64).reshape(self.action_dim)
+                self._python_choice = getattr(self.fallback, "choice", "fallback")
+        if code == INVALID:
+            raise invalid_observation(x)
+        return self._action.copy()
 
     # -- learning ------------------------------------------------------------------
     def learn(self, reward, last=False):
         """Stores the last act's experience, learns from reward, ends the trial if last."""
-        if self._act is None:
-            raise ValueError("learn() needs an act() first")
         reward = float(reward)
         if not math.isfinite(reward):
             raise ValueError("reward must be finite")
         # Store (forgetting one element when full), eq 6, eq 7, time discount.
-        self._size, self._tail, self._referred = kernels.learn(
-            self._obs, self._act, reward, self.steps, self._size, self._tail,
-            self._referred, *self._learn_args)
-        self.steps += 1
-        self._obs = self._act = None
+        if not kernels.learn_step(self.record, reward):
+            raise ValueError("learn() needs an act() first")
         if last:
             self.end_episode()
 
@@ -196,14 +231,12 @@ class Agent:
         recall table is emptied; "keep": it stays, its entries advancing at the next
         act. Either way eq 7's starting point is reset: the trial's memory decisions
         (the latest one, and the decided flags of eq7_scope "decided_only") were judged
-        by its last reward. The fallback's reset(), if any, is called."""
-        if not self._continuing:
-            self._tail = -1
-        self._referred = -1
-        if self._flag_decisions:
-            self._decided[:] = False
-        if not self._keep_recall:
-            self._table[:] = -1
+        by its last reward (kernels.end_trial). The fallback's reset(), if any, is
+        called."""
+        if self.compiled:
+            trial_end(self.record, self.fallback_record)
+            return
+        kernels.end_trial(self.record)
         reset = getattr(self.fallback, "reset", None)
         if reset is not None:
             reset()

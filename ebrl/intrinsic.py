@@ -14,8 +14,10 @@ import ctypes.util
 import numpy as np
 from llvmlite import binding
 from numba import njit, types
+from numba.experimental import structref
 
 from ebrl.config import READINGS, check_reading
+from ebrl.kernels import INTRINSIC, RANDOM
 
 THETA = 0.25  # eq 9's sensitivity threshold for the floating robot
 
@@ -107,16 +109,20 @@ def random_action(rng, action_dim, sd=0.5):
     return _clip(rng.normal(0.0, sd, size=action_dim))
 
 
-#: The compiled avoidance (Intrinsic with the paper's functions): eq 8 or eq 9-10.
-TURNING, ACCELERATING = range(2)
+#: What a fallback's avoidance is: eq 8 (TURNING), eq 9-10 (ACCELERATING), computed by
+#: the caller into the action before the fallback's step (GIVEN: an evolved genome's
+#: avoid, ebrl.behaviour); WALK: the random walk, no avoidance.
+TURNING, ACCELERATING, GIVEN, WALK = range(4)
 
 
 @njit(cache=True)
 def avoid_into(kind, readings, theta, last, out):
     """out = eq 8's turn (TURNING) or eq 9-10's accelerations (ACCELERATING), holding
-    `last` inside eq 9's dead zone when it is not empty."""
+    `last` inside eq 9's dead zone when it is not empty; GIVEN leaves out as it is."""
     if kind == TURNING:
         out[0] = eq8(readings)
+        return
+    if kind == GIVEN:
         return
     b_h, b_v = eq10(readings)
     hold = last.shape[0] > 0
@@ -145,19 +151,121 @@ def fallback_act(kind, readings, random, add, theta, last, out):
     return random.shape[0] > 0
 
 
-class RandomWalk:
+# -- a fallback as one named record ------------------------------------------------------
+
+@structref.register
+class FallbackStateType(types.StructRef):
+    def preprocess_fields(self, fields):
+        return tuple((name, types.unliteral(typ)) for name, typ in fields)
+
+
+class FallbackRecord(structref.StructRefProxy):
+    """A fallback (RandomWalk or Intrinsic) as the record fallback_step works on: its
+    kind (WALK, TURNING, ACCELERATING, GIVEN), random share and spread, the
+    random_in_avoidance reading (add), eq 9's theta, the held action (`last`, empty
+    without hold), scratch for the random action, who chose its last action (RANDOM or
+    INTRINSIC, -1 before any), and the random stream its Python calls draw from."""
+
+
+FALLBACK_FIELDS = ("kind", "rate", "sd", "add", "theta", "last", "random", "choice", "rng")
+structref.define_proxy(FallbackRecord, FallbackStateType, list(FALLBACK_FIELDS))
+
+
+@njit(cache=True)
+def choice_of(f):
+    """The record's choice (RANDOM, INTRINSIC, -1 before any)."""
+    return f.choice
+
+
+@njit(cache=True)
+def fallback_step(f, readings, rng, out):
+    """The fallback's action into out, its draws from rng in their order: the random
+    walk's Gaussians (WALK); or Intrinsic's uniform draw, then the random action's
+    Gaussians when it is below the rate, then fallback_act (a GIVEN avoidance is in out
+    already). Returns, and keeps as f.choice, RANDOM or INTRINSIC."""
+    dim = out.shape[0]
+    if f.kind == WALK:
+        for i in range(dim):
+            out[i] = rng.normal(0.0, f.sd)
+        clip_unit(out)
+        f.choice = RANDOM
+        return RANDOM
+    random = f.random[:0]
+    if rng.random() < f.rate:
+        random = f.random[:dim]
+        for i in range(dim):
+            random[i] = rng.normal(0.0, f.sd)
+    chose = fallback_act(f.kind, readings, random, f.add, f.theta, f.last, out)
+    f.choice = RANDOM if chose else INTRINSIC
+    return f.choice
+
+
+@njit(cache=True)
+def fallback_reset(f):
+    """A trial ends: the held acceleration (eq9_dead_zone "keep") returns to 0."""
+    if f.last.shape[0]:
+        f.last[:] = 0.0
+
+
+@njit(cache=True)
+def fallback_call(f, readings, out):
+    """fallback_step drawing from the record's own stream (a fallback called from Python)."""
+    return fallback_step(f, readings, f.rng, out)
+
+
+class _Fallback:
+    """What RandomWalk and Intrinsic share: their record (`record`, bound to the random
+    stream of the latest call), and the call itself, which is one compiled
+    fallback_step."""
+
+    _kind = WALK
+    _choices = (None, "intrinsic", "random")
+
+    def _record(self, rate, sd, add, last):
+        self._args = (self._kind, float(rate), float(sd), bool(add), THETA,
+                      _NOTHING if last is None else last, np.zeros(self.action_dim), -1)
+        self.bind(np.random.default_rng(0))
+
+    def bind(self, rng):
+        """Binds the record to rng, the stream its Python calls draw from (a new record
+        only for a new stream; the agent binds its own at construction)."""
+        if getattr(self, "_bound", None) is not rng:
+            self.record = FallbackRecord(*self._args, rng)
+            self._bound = rng
+
+    @property
+    def choice(self):
+        """Who chose the last action: "intrinsic" or "random" (None before any)."""
+        code = choice_of(self.record)
+        return self._choices[code] if code >= 0 else None
+
+    def _given(self, readings, out):
+        """For a GIVEN avoidance: out = the avoidance of readings (none here)."""
+
+    def __call__(self, readings, rng):
+        self.bind(rng)
+        readings = _readings(readings)
+        out = np.empty(self.action_dim)
+        self._given(readings, out)
+        fallback_call(self.record, readings, out)
+        return out
+
+
+class RandomWalk(_Fallback):
     """The paper's condition without avoidance: the random action every time."""
 
-    choice = "random"  # who chose the last action (ebrl.agent.DECIDERS)
+    compiled = True
 
     def __init__(self, action_dim, sd=0.5):
         self.action_dim, self.sd = action_dim, sd
+        self._record(0.0, sd, False, None)
 
-    def __call__(self, readings, rng):
-        return random_action(rng, self.action_dim, self.sd)
+    @property
+    def choice(self):
+        return "random"
 
 
-class Intrinsic:
+class Intrinsic(_Fallback):
     """The avoidance behaviour with the random action at probability random_rate (0.2).
 
     random_in_avoidance (Section 3.4, "introduce some probability of random action"):
@@ -174,9 +282,9 @@ class Intrinsic:
     memory takes in between are not seen: the fallback holds its own output.
 
     With the paper's avoid functions (avoid_by_turning, avoid_by_accelerating) the
-    draws are made, then one compiled fallback_act does the rest; any other avoid (an
-    evolved genome's) runs the same steps in Python (tests/test_ebrl_readings.py checks
-    the two alike).
+    whole step is compiled (fallback_step); any other avoid (an evolved genome's) is
+    computed in Python first, then the same fallback_step makes the draws and the rest
+    (kind GIVEN; tests/test_ebrl_readings.py checks the two alike).
     """
 
     def __init__(self, avoid, action_dim, random_rate=0.2, sd=0.5, *,
@@ -184,41 +292,28 @@ class Intrinsic:
         self.avoid, self.action_dim = avoid, action_dim
         self.random_rate, self.sd = random_rate, sd
         self.random_in_avoidance = check_reading("random_in_avoidance", random_in_avoidance)
-        self._add = random_in_avoidance == "add"
         self.last = np.zeros(action_dim) if hold else None  # eq 9's "not changed"
-        self.choice = None  # who chose the last action: "intrinsic" or "random"
-        self._kind = {avoid_by_turning: TURNING, avoid_by_accelerating: ACCELERATING}.get(avoid)
+        self._kind = {avoid_by_turning: TURNING,
+                      avoid_by_accelerating: ACCELERATING}.get(avoid, GIVEN)
+        self._record(random_rate, sd, random_in_avoidance == "add", self.last)
 
-    def _avoid(self, readings):
+    @property
+    def compiled(self):
+        """True when the avoidance itself is compiled (the paper's eq 8 or eq 9-10)."""
+        return self._kind != GIVEN
+
+    def _given(self, readings, out):
+        if self._kind != GIVEN:
+            return
         if self.last is None:
-            return np.array(self.avoid(readings), dtype=np.float64, ndmin=1)
-        return np.array(self.avoid(readings, previous=self.last), dtype=np.float64, ndmin=1)
-
-    def __call__(self, readings, rng):
-        if self._kind is not None:
-            random = (rng.normal(0.0, self.sd, size=self.action_dim)
-                      if rng.random() < self.random_rate else _NOTHING)
-            out = np.empty(self.action_dim)
-            chose = fallback_act(self._kind, _readings(readings), random, self._add, THETA,
-                                 _NOTHING if self.last is None else self.last, out)
-            self.choice = "random" if chose else "intrinsic"
-            return out
-        if rng.random() < self.random_rate:
-            self.choice = "random"
-            action = random_action(rng, self.action_dim, self.sd)
-            if self._add:
-                action = _clip(self._avoid(readings) + action)
+            out[:] = np.array(self.avoid(readings), dtype=np.float64, ndmin=1)
         else:
-            self.choice = "intrinsic"
-            action = self._avoid(readings)
-        if self.last is not None:
-            self.last[:] = action
-        return action
+            out[:] = np.array(self.avoid(readings, previous=self.last), dtype=np.float64,
+                              ndmin=1)
 
     def reset(self):
         """A trial ends: eq 9's held acceleration (hold=True) returns to 0."""
-        if self.last is not None:
-            self.last[:] = 0.0
+        fallback_reset(self.record)
 
 
 #: Section 3.4's intrinsic behaviours by equation: (behaviour, action dimension).

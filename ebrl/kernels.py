@@ -28,9 +28,16 @@ EQ7_DECIDED_ONLY) and forgetting (FORGET_LEAST_RELIABLE, FORGET_OLDEST). The epi
 and recall-table switches act at a trial's end, in ebrl.Agent.end_episode.
 """
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.experimental import structref
 
 INVALID = -2  # act's answer for an observation that is not finite or whose square overflows
+FALLBACK = -1  # act_memory's answer when the fallback is to choose the action
+#: Who chose an action: the memory (eq 5); the fallback's intrinsic behaviour or its
+#: random action; or the exploration draw, which handed to the fallback a step the
+#: memory would have taken. AgentState.decider holds the index, -1 before any act.
+DECIDERS = ("memory", "intrinsic", "random", "exploration")
+MEMORY, INTRINSIC, RANDOM, EXPLORATION = range(4)
 EQ7_TO_START, EQ7_DECIDED_ONLY = 0, 1  # learn's eq7_scope
 FORGET_LEAST_RELIABLE, FORGET_OLDEST = 0, 1  # learn's forgetting
 
@@ -291,3 +298,111 @@ def learn(x, action, reward, step, size, tail, referred, inputs, sums, variance,
             eq7(rel, prev, referred, reward, rho)
     time_discount(rel, size, decay)
     return size, tail, referred
+
+
+# -- the agent as one named record ------------------------------------------------------
+
+@structref.register
+class AgentStateType(types.StructRef):
+    def preprocess_fields(self, fields):
+        return tuple((name, types.unliteral(typ)) for name, typ in fields)
+
+
+class AgentRecord(structref.StructRefProxy):
+    """ebrl.Agent's whole state as one record that compiled code takes as it is: the
+    memory's arrays (as the module docstring lays them out), the recall table, the
+    config's numbers, the agent's random stream (its numpy Generator, drawn in place),
+    the last act's input and action until learn stores them, and the counters.
+    Agent.act and Agent.learn call act_memory / learn_step on it, and a compiled loop
+    (experiments.running.fused) iterates the same functions on the same record. Python
+    reads its counters through `counters`; its arrays are the caller's own (shared)."""
+
+
+#: The record's fields, in the constructor's order.
+AGENT_FIELDS = (
+    # the stream and the config's numbers (floats, so one compiled version serves all)
+    "rng", "exploration", "alpha", "threshold", "floor", "initial_utility",
+    "initial_reliability", "discount", "cutoff", "rho", "decay",
+    # the readings acting here, as ints / flags (ebrl.config.READINGS)
+    "eq7_scope", "forgetting", "flag_decisions", "continuing", "keep_recall",
+    # eq 3's modalities
+    "group_of", "group_size", "group_weight",
+    # the memory (2.1), the variance sums (eq 2), the act's scratch, the recall table (2.2)
+    "inputs", "sums", "variance", "sim", "actions", "utility", "rel", "time", "nxt", "prev",
+    "decided", "table", "table_w",
+    # the last act's input and action, and whether learn has yet to store them
+    "obs", "action", "pending",
+    # the counters: stored elements, the episode's latest element, the latest element used
+    # for a decision (eq 7), steps learnt, decisions by memory and by the fallback, who
+    # chose the last action (an index of DECIDERS)
+    "size", "tail", "referred", "steps", "memory_decisions", "fallback_decisions", "decider",
+)
+structref.define_proxy(AgentRecord, AgentStateType, list(AGENT_FIELDS))
+#: The record's arrays, in order (AGENT_FIELDS from "group_of" to "action").
+AGENT_ARRAYS = AGENT_FIELDS[AGENT_FIELDS.index("group_of"): AGENT_FIELDS.index("pending")]
+
+
+@njit(cache=True)
+def counters(s):
+    """The record's counters: (size, tail, referred, steps, memory decisions, fallback
+    decisions, decider)."""
+    return (s.size, s.tail, s.referred, s.steps, s.memory_decisions, s.fallback_decisions,
+            s.decider)
+
+
+@njit(cache=True)
+def act_memory(s, x):
+    """One act's memory part on record s: eq 2-4 against the memory, the recall table
+    (eq 1), eq 5's choice, then the exploration draw. x is kept as the act's input.
+    Returns the element whose action s.action now holds (decider MEMORY), FALLBACK when
+    the fallback is to fill s.action (decider EXPLORATION when the draw overruled the
+    memory, else left for the fallback's choice), or INVALID, with nothing changed, for
+    an x that is not finite or whose square overflows."""
+    element = act(x, s.size, s.inputs, s.variance, s.group_of, s.group_size, s.group_weight,
+                  s.sim, s.nxt, s.table, s.table_w, s.utility, s.alpha, s.threshold)
+    if element == INVALID:
+        return INVALID
+    s.obs[:] = x
+    s.pending = True
+    explore = s.rng.random() < s.exploration
+    if element >= 0 and not explore:
+        s.action[:] = s.actions[element]
+        s.referred = element
+        if s.flag_decisions:
+            s.decided[element] = True
+        s.memory_decisions += 1
+        s.decider = MEMORY
+        return element
+    s.fallback_decisions += 1
+    s.decider = EXPLORATION if element >= 0 else -1
+    return FALLBACK
+
+
+@njit(cache=True)
+def learn_step(s, reward):
+    """One learn on record s: stores the last act's (input, action) and learns from
+    reward (`learn`); False, with nothing changed, when no act is pending."""
+    if not s.pending:
+        return False
+    s.size, s.tail, s.referred = learn(
+        s.obs, s.action, reward, s.steps, s.size, s.tail, s.referred, s.inputs, s.sums,
+        s.variance, s.actions, s.utility, s.rel, s.time, s.nxt, s.prev, s.table, s.table_w,
+        s.floor, s.initial_utility, s.initial_reliability, s.discount, s.cutoff, s.rho,
+        s.decay, s.decided, s.eq7_scope, s.forgetting)
+    s.steps += 1
+    s.pending = False
+    return True
+
+
+@njit(cache=True)
+def end_trial(s):
+    """A trial ends (ebrl.Agent.end_episode has the readings' meaning): the episode's
+    link is cut unless continuing, eq 7's starting point and its decided flags reset,
+    the recall table emptied unless kept."""
+    if not s.continuing:
+        s.tail = -1
+    s.referred = -1
+    if s.flag_decisions:
+        s.decided[:] = False
+    if not s.keep_recall:
+        s.table[:] = -1

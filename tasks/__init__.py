@@ -40,20 +40,32 @@ class Environment(control.Environment):
     #: False runs dm_control's hooks one by one even where a compiled step exists.
     compiled = True
 
+    @property
+    def steps_compiled(self):
+        """True when step() runs the task's compiled step (tasks.kernels.step)."""
+        return self.compiled and not self._flat_observation and self._task.kind is not None
+
     def step(self, action):
-        if self._reset_next_step or not self.compiled or self._flat_observation:
+        if self._reset_next_step or not self.steps_compiled:
             return super().step(action)
-        out = self._task.compiled_step(action, self._physics)
-        if out is None:
-            return super().step(action)
-        reward, observation, discount = out
-        self._step_count += 1
-        if self._step_count >= self._step_limit:
+        reward, observation, discount = self._task.compiled_step(action, self._physics)
+        if self.advance(1, discount is not None) and discount is None:
             discount = 1.0
         if discount is not None:
-            self._reset_next_step = True
             return dm_env.TimeStep(dm_env.StepType.LAST, reward, discount, observation)
         return dm_env.TimeStep(dm_env.StepType.MID, reward, 1.0, observation)
+
+    def advance(self, steps, goal):
+        """Counts `steps` agent steps run by compiled code (this step() or a compiled
+        loop); the episode ends at the goal or at the time limit, and the next step()
+        then resets. Returns True when it ended. (dm_control's Environment keeps these
+        counts in private fields and has no public way to set them: they are used here,
+        in its subclass, and nowhere else.)"""
+        self._step_count += steps
+        last = goal or self._step_count >= self._step_limit
+        if last:
+            self._reset_next_step = True
+        return last
 
     def close(self):
         physics, self._physics = getattr(self, "_physics", None), None

@@ -6,7 +6,6 @@ own velocity until it bumps into something. It starts at rest. The robot file's
 actuators ``thrust_x`` and ``thrust_y`` push along the world's x and y axes
 (motors on slide joints, or on a site with a world-fixed reference site).
 """
-import collections
 
 import mujoco
 import numpy as np
@@ -48,8 +47,8 @@ class Physics(navigation.Physics):
     def _reload_from_data(self, data):
         super()._reload_from_data(data)
         m = self.model
-        self._thrust_x = navigation._id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, "thrust_x")
-        self._thrust_y = navigation._id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, "thrust_y")
+        self._thrust_x = navigation.named_id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, "thrust_x")
+        self._thrust_y = navigation.named_id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, "thrust_y")
         if self._thrust_x < 0 or self._thrust_y < 0:
             raise navigation.ContractError("the floating drive needs actuators 'thrust_x' "
                                            "and 'thrust_y'")
@@ -57,26 +56,23 @@ class Physics(navigation.Physics):
             raise navigation.ContractError(
                 "the floating drive needs 8 rangefinders (E, NE, N, NW, W, SW, S, SE; eq 10)")
         self._mass = float(m.body_subtreemass[self._base])
-        k = self._kints
-        k[kernels.I_ACT0], k[kernels.I_ACT1] = self._thrust_x, self._thrust_y
-        k[kernels.I_HULL] = navigation._id(m, mujoco.mjtObj.mjOBJ_GEOM, "hull")
         if self._free is not None:  # a free joint's dofs start with x, y
-            k[kernels.I_DOF_X], k[kernels.I_DOF_Y] = self._free_dof, self._free_dof + 1
+            dof_x, dof_y = self.free_dof, self.free_dof + 1
         else:
-            k[kernels.I_DOF_X] = m.jnt_dofadr[self.base_joints["x"]]
-            k[kernels.I_DOF_Y] = m.jnt_dofadr[self.base_joints["y"]]
-        #: What the bump readings' coast works on (tasks.kernels.bump_phase): the contact
-        #: count and array, and scratch for the state before a substep and the normal.
-        self.bump_args = (kernels.contact_count(data.ptr), *kernels.contact_views(data.ptr),
-                          np.empty(m.nq), np.empty(m.nv), np.empty(2))
+            dof_x = m.jnt_dofadr[self.base_joints["x"]]
+            dof_y = m.jnt_dofadr[self.base_joints["y"]]
+        #: The bumper geom's id (the bump readings' coast watches its contacts).
+        self.hull = navigation.named_id(m, mujoco.mjtObj.mjOBJ_GEOM, "hull")
+        self._settings.update(act0=self._thrust_x, act1=self._thrust_y, hull=self.hull,
+                              dof_x=dof_x, dof_y=dof_y)
 
     def set_bump(self, bump, restitution=1.0):
         """The bump reading applied after each substep: "stop" or "bounce" (with the
         share of the speed into the wall that it reflects); anything else leaves a wall
         to the contact's physics ("grip", "slide")."""
-        self._kints[kernels.I_BUMP] = {"stop": kernels.BUMP_STOP,
-                                       "bounce": kernels.BUMP_BOUNCE}.get(bump, kernels.BUMP_PHYSICS)
-        self._kfloats[kernels.F_RESTITUTION] = restitution
+        self.set_drive(bump={"stop": kernels.BUMP_STOP,
+                             "bounce": kernels.BUMP_BOUNCE}.get(bump, kernels.BUMP_PHYSICS),
+                       restitution=restitution)
 
     def step(self, nstep=1):
         """Substeps; with "stop" or "bounce", a substep that brings the bumper into a wall
@@ -84,9 +80,7 @@ class Physics(navigation.Physics):
         the velocity becomes 0 ("stop") or its mirror image off the wall ("bounce", the
         part into the wall scaled by the restitution); with the others, the substeps as
         navigation.Physics.step runs them."""
-        (m, d, _, _, qpos, _, xmat, _, bad_qacc, ints, floats) = self.kernel_args
-        status = kernels.bump_phase(m, d, nstep, bad_qacc, xmat, qpos, self._qvel, ints,
-                                    floats, self.bump_args)
+        status = kernels.bump_phase(self.drive_record(), nstep)
         self.substeps += nstep
         if status != kernels.OK:
             self.raise_for(status)
@@ -110,30 +104,24 @@ class Physics(navigation.Physics):
 
 class Floating(navigation.Navigation):
     action_dim = 2
+    kind = kernels.FLOATING
+    observation_keys = ("range", "velocity")
+
+    def __init__(self, config=navigation.TaskConfig(), **kw):
+        super().__init__(config, **kw)
+        self.velocity_noise = float(config.velocity_noise)
 
     def initialize_episode(self, physics):
         physics.step_seconds = substeps(physics.timestep, self.time_scale) * physics.timestep
         physics.set_bump(self.config.bump, self.config.restitution)
         n = substeps(physics.timestep, self.time_scale)
-        self.kernel_settings(physics, 1, n - 1, (MAX_ACCELERATION, 0.0))
-        physics._kints[kernels.I_THRUST] = THRUSTS.index(self.config.thrust)
-        physics._kfloats[kernels.F_VELOCITY] = physics.step_seconds / UNIT
-        physics._kfloats[kernels.F_THRUST] = physics.thrust_scale()
-        physics._kints[kernels.I_VELOCITY_CODE] = self.config.velocity_code == "code"
-        physics._kfloats[kernels.F_VELOCITY_FULL] = VELOCITY_FULL_SCALE
+        self.start_drive(physics, **self.kernel_settings(1, n - 1, (MAX_ACCELERATION, 0.0)),
+                         thrust=THRUSTS.index(self.config.thrust),
+                         velocity=physics.step_seconds / UNIT,
+                         thrust_force=physics.thrust_scale(),
+                         velocity_code=self.config.velocity_code == "code",
+                         velocity_full=VELOCITY_FULL_SCALE)
         super().initialize_episode(physics)
-
-    def compiled_step(self, action, physics):
-        a = self.compiled_action(action)
-        u, z = self.draws(physics)
-        sd = self.config.velocity_noise
-        vz = self.random.normal(0.0, sd, size=2) if sd > 0 else navigation._NO_NOISE
-        status, n, goal, codes, velocity = kernels.floating_step(
-            a, u, z, vz, *physics.kernel_args, physics._body_velocity, physics._qvel,
-            physics.bump_args)
-        observation = collections.OrderedDict()
-        observation["range"], observation["velocity"] = codes, velocity
-        return self.finish_compiled(status, n, goal, physics, observation)
 
     def get_observation(self, physics):
         obs = super().get_observation(physics)

@@ -90,7 +90,7 @@ class NavigationEnv(gymnasium.Env):
     def reset(self, *, seed=None, options=None):
         super().reset(seed=seed)
         if seed is not None:  # the task's own stream: start jitter, sensor and action noise
-            self._env.task._random = np.random.RandomState(seed)
+            self._env.task.reseed(seed)
         ts = self._env.reset()
         return _observation(ts.observation), self._info()
 
@@ -98,6 +98,11 @@ class NavigationEnv(gymnasium.Env):
         ts = self._env.step(action)
         terminated = ts.last() and ts.discount == 0.0
         return _observation(ts.observation), float(ts.reward), terminated, False, self._info()
+
+    @property
+    def dm_env(self):
+        """The dm_env environment this adapts (tasks.Environment)."""
+        return self._env
 
     def render(self):
         if self.render_mode != "rgb_array":

@@ -36,6 +36,7 @@ import mujoco
 import numpy as np
 from llvmlite import binding
 from numba import njit, types
+from numba.experimental import structref
 
 _LIBRARY = sorted(glob.glob(os.path.join(os.path.dirname(mujoco.__file__), "libmujoco.so*")))
 if not _LIBRARY:  # pragma: no cover - every mujoco wheel for Linux ships it
@@ -187,14 +188,14 @@ def encode(distance, noise, levels, per_unit):
 
 
 @njit(cache=True)
-def ranges(m, d, flags, sensordata, beams, metres_to_units, radius):
+def ranges(m, d, flags, sensordata, first, end, metres_to_units, radius):
     """The sensor stage run once at the current state (MuJoCo's is disabled while
     stepping), then each beam's distance from the body surface in units (inf: no hit).
-    beams = (first, end) of the rangefinders' sensordata."""
+    first, end: the rangefinders' span of sensordata."""
     flags[0] &= ~_SENSOR_BIT
     mj_sensorPos(m, d)
     flags[0] |= _SENSOR_BIT
-    return surface_distances(sensordata[beams[0]:beams[1]], metres_to_units, radius)
+    return surface_distances(sensordata[first:end], metres_to_units, radius)
 
 
 @njit(cache=True)
@@ -232,77 +233,130 @@ def noise_factor(noise, u):
 
 
 # -- the drives -------------------------------------------------------------------
-# A drive's settings reach the kernels as two arrays, `ints` and `floats`, indexed by
-# the names below: the physics fills its part when it loads (navigation.Physics), the
-# task its part when an episode starts (the substeps, the noise, the drive's constants).
-(I_ACT0, I_ACT1,   # the drive's two actuators: forward, turn (two-wheel); thrust x, y
- I_QYAW,           # qpos address of the base's yaw hinge, -1 for none
- I_FREE,           # 1 for a free-joint base (its tilt is checked), else 0
- I_BASE,           # the base body's id
- I_BEAM0, I_BEAM1,  # the rangefinders' sensordata: first, end
- I_N_FIRST,        # substeps of the first phase: the turn (two-wheel), the thrust (floating)
- I_N_REST,         # substeps of the rest: the move (two-wheel), the coast (floating)
- I_THRUST,         # floating: the thrust reading, an index of tasks.config.THRUSTS
- I_VELOCITY_CODE,  # floating: 1 for the velocity read through the 0-255 code, else 0
- I_BUMP,           # floating: BUMP_PHYSICS, BUMP_STOP or BUMP_BOUNCE (tasks.config.BUMPS)
- I_HULL,           # the bumper geom's id
- I_DOF_X, I_DOF_Y,  # the base's x and y velocity dofs (qvel addresses)
- I_WHEELS,         # two-wheel: 1 for wheels under servos (WheelPhysics), 0 for a planar base
- I_ACT_ADR0, I_ACT_ADR1,    # wheels: the servos' activations (act addresses), left, right
- I_WHEEL_Q0, I_WHEEL_Q1,    # wheels: the wheel hinges' qpos addresses, left, right
- I_RAMP_FIRST, I_RAMP_REST,  # wheels: substeps of each phase's ramp (WheelPhysics.RAMP)
- ) = range(22)
-N_INTS = 22
+# A drive's kernels work on one named record (`Drive`): the MuJoCo handles, the robot's
+# parts and the drive's settings for the episode. navigation.Physics.drive_record builds
+# it, each drive's task giving its settings (two_wheel.TwoWheel, floating.Floating).
+
 THRUST_SCALED, THRUST_DEMAND, THRUST_CLIPPED = range(3)  # tasks.config.THRUSTS, in order
 #: The floating bump readings as the coast runs them: the contact's physics alone
 #: ("grip", "slide"), or the velocity change at a contact ("stop", "bounce").
 BUMP_PHYSICS, BUMP_STOP, BUMP_BOUNCE = range(3)
-(F_UNIT, F_TIMESTEP, F_METRES_TO_UNITS, F_RADIUS, F_MIN_COS_TILT,
- F_X0, F_X1, F_Y0, F_Y1,  # the goal square, units
- F_LEVELS, F_PER_UNIT,    # Section 3.2's code: 255 and -255 / sensor range
- F_ACTION_NOISE,          # Section 3.3's noise
- F_GAIN0, F_GAIN1,        # MAX_TURN, MAX_MOVE (two-wheel); MAX_ACCELERATION, - (floating)
- F_TOLERANCE,             # two-wheel: a move short by more than this was blocked
- F_VELOCITY,              # floating: m/s -> units per agent step
- F_THRUST,                # floating: the force per unit/step of velocity change
- F_VELOCITY_FULL,         # floating: the velocity code's full scale, units/step
- F_RESTITUTION,           # floating, bump "bounce": the share of the speed into the wall reflected
- F_HALF_TRACK, F_WHEEL_RADIUS,  # wheels: half the wheels' distance apart, their radius (m)
- ) = range(21)
-N_FLOATS = 21
+#: The drives a Drive record serves (its `kind`).
+TWO_WHEEL, FLOATING = range(2)
+
+
+@structref.register
+class DriveType(types.StructRef):
+    def preprocess_fields(self, fields):
+        return tuple((name, types.unliteral(typ)) for name, typ in fields)
+
+
+class Drive(structref.StructRefProxy):
+    """One drive's kernels' record: what they read and write of MuJoCo (HANDLES), the
+    robot's parts and the drive's settings (SETTINGS, ints then floats). Built by
+    navigation.Physics.drive_record; the fields are documented in SETTINGS."""
+
+
+#: MuJoCo's structs and arrays the kernels touch: the model and data addresses, the
+#: disable flags and the bad-acceleration warning count (int32 views), MuJoCo's own
+#: arrays, the base body's rows of xpos and xmat, scratch for mj_objectVelocity; the
+#: contact count and the contact array (contact_views) with scratch for the bump
+#: readings' coast; the two-wheel step's plan (move, turn sign, x, y, cos, sin).
+HANDLES = ("m", "d", "flags", "bad_qacc", "ctrl", "qpos", "qvel", "act", "sensordata",
+           "xpos", "xmat", "velocity6", "ncon", "contact_f", "contact_i", "layout", "qpos0",
+           "qvel0", "normal", "plan")
+#: The settings, by name, with what each is (ints first, then floats).
+SETTINGS = {
+    "kind": "TWO_WHEEL or FLOATING",
+    "act0": "the drive's first actuator: forward (planar two-wheel), left wheel, thrust x",
+    "act1": "the drive's second actuator: turn, right wheel, thrust y",
+    "qyaw": "qpos address of the base's yaw hinge, -1 for none",
+    "free": "1 for a free-joint base (its tilt is checked), else 0",
+    "base": "the base body's id",
+    "beam0": "the rangefinders' sensordata: first",
+    "beam1": "the rangefinders' sensordata: end",
+    "n_first": "substeps of the first phase: the turn (two-wheel), the thrust (floating)",
+    "n_rest": "substeps of the rest: the move (two-wheel), the coast (floating)",
+    "thrust": "floating: the thrust reading, an index of tasks.config.THRUSTS",
+    "velocity_code": "floating: 1 for the velocity read through the 0-255 code, else 0",
+    "bump": "floating: BUMP_PHYSICS, BUMP_STOP or BUMP_BOUNCE (tasks.config.BUMPS)",
+    "hull": "the bumper geom's id",
+    "dof_x": "the base's x velocity dof (qvel address)",
+    "dof_y": "the base's y velocity dof",
+    "wheels": "two-wheel: 1 for wheels under servos (WheelPhysics), 0 for a planar base",
+    "act_adr0": "wheels: the left servo's activation (act address)",
+    "act_adr1": "wheels: the right servo's activation",
+    "wheel_q0": "wheels: the left wheel hinge's qpos address",
+    "wheel_q1": "wheels: the right wheel hinge's qpos address",
+    "ramp_first": "wheels: substeps of the first phase's ramp (WheelPhysics.RAMP)",
+    "ramp_rest": "wheels: substeps of the rest's ramp",
+    # floats
+    "unit": "metres per paper unit",
+    "timestep": "the model's timestep, s",
+    "metres_to_units": "1 / unit",
+    "radius": "the robot's radius, units",
+    "min_cos_tilt": "the cosine of the largest tilt (navigation.MAX_TILT_DEGREES)",
+    "x0": "the goal square: left", "x1": "right", "y0": "bottom", "y1": "top",
+    "levels": "Section 3.2's code: 255",
+    "per_unit": "Section 3.2's code: -255 / sensor range",
+    "action_noise": "Section 3.3's noise",
+    "gain0": "MAX_TURN (two-wheel), MAX_ACCELERATION (floating)",
+    "gain1": "MAX_MOVE (two-wheel)",
+    "tolerance": "two-wheel: a move short by more than this was blocked",
+    "velocity": "floating: m/s -> units per agent step",
+    "thrust_force": "floating: the force per unit/step of velocity change",
+    "velocity_full": "floating: the velocity code's full scale, units/step",
+    "restitution": "floating, bump \"bounce\": the share of the speed into the wall reflected",
+    "half_track": "wheels: half the wheels' distance apart (m)",
+    "wheel_radius": "wheels: their radius (m)",
+}
+#: The settings that are ints (the rest are floats).
+INT_SETTINGS = tuple(SETTINGS)[:tuple(SETTINGS).index("unit")]
+structref.define_proxy(Drive, DriveType, list(HANDLES) + list(SETTINGS))
+
+
+def drive_record(handles, settings):
+    """The Drive record of the handles (a dict of HANDLES) and the settings (a dict of
+    SETTINGS; a missing one is 0); ValueError naming a setting it does not know."""
+    unknown = set(settings) - set(SETTINGS)
+    if unknown:
+        raise ValueError(f"unknown drive settings: {', '.join(sorted(unknown))}")
+    values = [int(settings.get(k, 0)) if k in INT_SETTINGS else float(settings.get(k, 0.0))
+              for k in SETTINGS]
+    return Drive(*(handles[k] for k in HANDLES), *values)
 
 
 @njit(cache=True)
-def step_phase(m, d, n, bad_qacc, xmat, ints, floats):
-    """`run` with the physics' tilt check."""
-    return run(m, d, n, bad_qacc, xmat, ints[I_FREE] != 0, floats[F_MIN_COS_TILT])
+def step_phase(s, n):
+    """`run` with the robot's tilt check."""
+    return run(s.m, s.d, n, s.bad_qacc, s.xmat, s.free != 0, s.min_cos_tilt)
 
 
 @njit(cache=True)
-def base_pose(qpos, xpos, xmat, ints, floats):
-    return pose(xpos, xmat, qpos, ints[I_QYAW], floats[F_UNIT])
+def base_pose(s):
+    """navigation.Physics.robot_pose."""
+    return pose(s.xpos, s.xmat, s.qpos, s.qyaw, s.unit)
 
 
 @njit(cache=True)
-def goal_reached(qpos, xpos, xmat, ints, floats):
+def goal_reached(s):
     """navigation.Physics.in_goal."""
-    x, y, _ = base_pose(qpos, xpos, xmat, ints, floats)
-    return floats[F_X0] <= x <= floats[F_X1] and floats[F_Y0] <= y <= floats[F_Y1]
+    x, y, _ = base_pose(s)
+    return s.x0 <= x <= s.x1 and s.y0 <= y <= s.y1
 
 
 @njit(cache=True)
-def readings(m, d, flags, sensordata, ints, floats, noise):
+def readings(s, noise):
     """navigation.Navigation.sense: the encoded readings plus noise (empty: none)."""
-    return encode(ranges(m, d, flags, sensordata, ints[I_BEAM0:I_BEAM1 + 1],
-                         floats[F_METRES_TO_UNITS], floats[F_RADIUS]),
-                  noise, floats[F_LEVELS], floats[F_PER_UNIT])
+    return encode(ranges(s.m, s.d, s.flags, s.sensordata, s.beam0, s.beam1,
+                         s.metres_to_units, s.radius), noise, s.levels, s.per_unit)
 
 
 @njit(cache=True)
-def factors(u, floats):
+def factors(s, u):
     """navigation.Navigation.noise_factors from its two uniform draws u (none are drawn,
     and both factors are 1, without noise)."""
-    noise = floats[F_ACTION_NOISE]
+    noise = s.action_noise
     if noise <= 0:
         return 1.0, 1.0
     return noise_factor(noise, u[0]), noise_factor(noise, u[1])
@@ -311,69 +365,69 @@ def factors(u, floats):
 # -- the two-wheel drive (tasks.two_wheel: Physics, a planar base; WheelPhysics, wheels) --
 
 @njit(cache=True)
-def drive(ctrl, ints, floats, speed, yaw_rate):
+def drive(s, speed, yaw_rate):
     """two_wheel.Physics.drive: speed in units/s along the heading, yaw rate in rad/s."""
-    ctrl[ints[I_ACT0]] = speed * floats[F_UNIT]
-    ctrl[ints[I_ACT1]] = yaw_rate
+    s.ctrl[s.act0] = speed * s.unit
+    s.ctrl[s.act1] = yaw_rate
 
 
 @njit(cache=True)
-def two_wheel_phase(turn, amount, n, ramp, m, d, ctrl, xmat, bad_qacc, ints, floats):
+def two_wheel_phase(s, turn, amount, n, ramp):
     """A phase of n substeps that turns by `amount` rad counter-clockwise (turn) or moves
     `amount` units forward: a planar base's servos get the speed that does it in the n
     substeps (two_wheel.Physics.begin_turn, begin_move); wheels get the speeds that turn
     them by the phase's angle over the first `ramp` substeps, then zero speeds for the
     rest, their servos settling on the targets (WheelPhysics._wheel_speeds and step).
     Returns a status."""
-    dt = floats[F_TIMESTEP]
-    if ints[I_WHEELS] == 0:
+    dt = s.timestep
+    if s.wheels == 0:
         if turn:
-            drive(ctrl, ints, floats, 0.0, amount / (n * dt))
+            drive(s, 0.0, amount / (n * dt))
         else:
-            drive(ctrl, ints, floats, amount / (n * dt), 0.0)
-        return step_phase(m, d, n, bad_qacc, xmat, ints, floats)
+            drive(s, amount / (n * dt), 0.0)
+        return step_phase(s, n)
     if turn:
-        w = amount * floats[F_HALF_TRACK] / floats[F_WHEEL_RADIUS]
+        w = amount * s.half_track / s.wheel_radius
         left, right = -w, w
     else:
-        w = amount * floats[F_UNIT] / floats[F_WHEEL_RADIUS]
+        w = amount * s.unit / s.wheel_radius
         left, right = w, w
-    ctrl[ints[I_ACT0]] = left / (ramp * dt)
-    ctrl[ints[I_ACT1]] = right / (ramp * dt)
-    status = step_phase(m, d, ramp, bad_qacc, xmat, ints, floats)
+    s.ctrl[s.act0] = left / (ramp * dt)
+    s.ctrl[s.act1] = right / (ramp * dt)
+    status = step_phase(s, ramp)
     if status != OK:
         return status
-    ctrl[ints[I_ACT0]] = 0.0
-    ctrl[ints[I_ACT1]] = 0.0
+    s.ctrl[s.act0] = 0.0
+    s.ctrl[s.act1] = 0.0
     if n > ramp:
-        status = step_phase(m, d, n - ramp, bad_qacc, xmat, ints, floats)
+        status = step_phase(s, n - ramp)
     return status
 
 
 @njit(cache=True)
-def two_wheel_halt(ctrl, act, qpos, ints, floats):
+def two_wheel_halt(s):
     """Physics.halt (both servos' speeds 0) or WheelPhysics.halt (the wheels' speeds 0
     and their targets where the wheels are: a stalled wheel gives up the rest)."""
-    if ints[I_WHEELS] == 0:
-        drive(ctrl, ints, floats, 0.0, 0.0)
+    if s.wheels == 0:
+        drive(s, 0.0, 0.0)
         return
-    ctrl[ints[I_ACT0]] = 0.0
-    act[ints[I_ACT_ADR0]] = qpos[ints[I_WHEEL_Q0]]
-    ctrl[ints[I_ACT1]] = 0.0
-    act[ints[I_ACT_ADR1]] = qpos[ints[I_WHEEL_Q1]]
+    s.ctrl[s.act0] = 0.0
+    s.act[s.act_adr0] = s.qpos[s.wheel_q0]
+    s.ctrl[s.act1] = 0.0
+    s.act[s.act_adr1] = s.qpos[s.wheel_q1]
 
 
 @njit(cache=True)
-def two_wheel_turn(a, u, m, d, ctrl, qpos, xpos, xmat, bad_qacc, ints, floats, plan):
+def two_wheel_turn(s, a, u):
     """two_wheel.TwoWheel.before_step for the clipped action a and the noise's uniforms
-    u: the turn phase. plan gets (move, turn sign, x, y, cos, sin of the heading after
+    u: the turn phase. s.plan gets (move, turn sign, x, y, cos, sin of the heading after
     the turn) for the move phase and two_wheel_finish. Returns a status."""
-    noise_turn, noise_move = factors(u, floats)
-    turn = -a * floats[F_GAIN0] * noise_turn  # counter-clockwise positive
-    move = floats[F_GAIN1] * (1.0 - abs(a)) * noise_move
-    status = two_wheel_phase(True, turn, ints[I_N_FIRST], ints[I_RAMP_FIRST], m, d, ctrl,
-                             xmat, bad_qacc, ints, floats)
-    x, y, heading = base_pose(qpos, xpos, xmat, ints, floats)
+    noise_turn, noise_move = factors(s, u)
+    turn = -a * s.gain0 * noise_turn  # counter-clockwise positive
+    move = s.gain1 * (1.0 - abs(a)) * noise_move
+    status = two_wheel_phase(s, True, turn, s.n_first, s.ramp_first)
+    x, y, heading = base_pose(s)
+    plan = s.plan
     plan[0] = move
     plan[1] = 1.0 if turn > 0 else -1.0
     plan[2], plan[3], plan[4], plan[5] = x, y, math.cos(heading), math.sin(heading)
@@ -381,60 +435,56 @@ def two_wheel_turn(a, u, m, d, ctrl, qpos, xpos, xmat, bad_qacc, ints, floats, p
 
 
 @njit(cache=True)
-def two_wheel_finish(m, d, ctrl, act, qpos, xpos, xmat, bad_qacc, ints, floats, plan):
+def two_wheel_finish(s):
     """two_wheel.TwoWheel.after_step: a move stopped short by more than the tolerance
     turns the rest, at MAX_TURN per MAX_MOVE, in the commanded turn's direction; then
     the drive halts. Returns (status, substeps run, in the goal)."""
-    x, y, _ = base_pose(qpos, xpos, xmat, ints, floats)
+    x, y, _ = base_pose(s)
+    plan = s.plan
     rest = plan[0] - ((x - plan[2]) * plan[4] + (y - plan[3]) * plan[5])
     status, n = OK, 0
-    if rest > floats[F_TOLERANCE]:
-        leftover = plan[1] * rest * floats[F_GAIN0] / floats[F_GAIN1]
-        n = ints[I_N_FIRST]
-        status = two_wheel_phase(True, leftover, n, ints[I_RAMP_FIRST], m, d, ctrl, xmat,
-                                 bad_qacc, ints, floats)
+    if rest > s.tolerance:
+        leftover = plan[1] * rest * s.gain0 / s.gain1
+        n = s.n_first
+        status = two_wheel_phase(s, True, leftover, n, s.ramp_first)
         if status != OK:
             return status, n, False
-    two_wheel_halt(ctrl, act, qpos, ints, floats)
-    return status, n, goal_reached(qpos, xpos, xmat, ints, floats)
+    two_wheel_halt(s)
+    return status, n, goal_reached(s)
 
 
 @njit(cache=True)
-def two_wheel_step(action, u, noise, m, d, flags, ctrl, qpos, xpos, xmat, sensordata,
-                   bad_qacc, ints, floats, plan, act):
+def two_wheel_step(s, action, u, noise):
     """One agent step of the two-wheel drive, the hooks' work in their order: the turn,
     the move, a blocked move's leftover turn, the halt, the goal test and the encoded
     readings. Returns (status, substeps run, in the goal, readings)."""
     nothing = np.empty(0)
     if not clip_unit(action):
         return NOT_FINITE, 0, False, nothing
-    status = two_wheel_turn(action[0], u, m, d, ctrl, qpos, xpos, xmat, bad_qacc, ints,
-                            floats, plan)
-    n = ints[I_N_FIRST]
+    status = two_wheel_turn(s, action[0], u)
+    n = s.n_first
     if status != OK:
         return status, n, False, nothing
-    status = two_wheel_phase(False, plan[0], ints[I_N_REST], ints[I_RAMP_REST], m, d, ctrl,
-                             xmat, bad_qacc, ints, floats)
-    n += ints[I_N_REST]
+    status = two_wheel_phase(s, False, s.plan[0], s.n_rest, s.ramp_rest)
+    n += s.n_rest
     if status != OK:
         return status, n, False, nothing
-    status, more, goal = two_wheel_finish(m, d, ctrl, act, qpos, xpos, xmat, bad_qacc, ints,
-                                          floats, plan)
+    status, more, goal = two_wheel_finish(s)
     n += more
     if status != OK:
         return status, n, False, nothing
-    return OK, n, goal, readings(m, d, flags, sensordata, ints, floats, noise)
+    return OK, n, goal, readings(s, noise)
 
 
 # -- the floating drive (tasks.floating.Physics) -------------------------------------
 
 @njit(cache=True)
-def demand(a, ints, floats):
+def demand(s, a):
     """floating.Floating.demand: the velocity change (units/step) for a demand a, by the
     thrust reading: "scaled" MAX_ACCELERATION a, "demand" a, "clipped" a clipped to
     [-MAX_ACCELERATION, MAX_ACCELERATION] (Python's min(max(a, -g), g))."""
-    gain = floats[F_GAIN0]
-    reading = ints[I_THRUST]
+    gain = s.gain0
+    reading = s.thrust
     if reading == THRUST_SCALED:
         return gain * a
     if reading == THRUST_DEMAND:
@@ -463,24 +513,23 @@ def hull_normal(ncon, contact_f, contact_i, layout, hull, normal):
 
 
 @njit(cache=True)
-def bump_phase(m, d, n, bad_qacc, xmat, qpos, qvel, ints, floats, bump):
+def bump_phase(s, n):
     """floating.Physics.step: n substeps; with the bump readings "stop" and "bounce", a
     substep that brings the bumper into a wall while moving towards it is undone (qpos
     back, so no contact force acts), the velocity becomes 0 ("stop") or its mirror image
     off the wall, the part into it scaled by the restitution ("bounce"), and mj_forward
-    recomputes the state. bump: (ncon, contact floats, contact ints, layout, qpos0,
-    qvel0, normal) from contact_count, contact_views and scratch arrays."""
-    if ints[I_BUMP] == BUMP_PHYSICS:
-        return step_phase(m, d, n, bad_qacc, xmat, ints, floats)
-    ncon, contact_f, contact_i, layout, qpos0, qvel0, normal = bump
-    dx, dy = ints[I_DOF_X], ints[I_DOF_Y]
+    recomputes the state."""
+    if s.bump == BUMP_PHYSICS:
+        return step_phase(s, n)
+    qpos, qvel, qpos0, qvel0, normal = s.qpos, s.qvel, s.qpos0, s.qvel0, s.normal
+    dx, dy = s.dof_x, s.dof_y
     for _ in range(n):
         qpos0[:] = qpos
         qvel0[:] = qvel
-        status = step_phase(m, d, 1, bad_qacc, xmat, ints, floats)
+        status = step_phase(s, 1)
         if status != OK:
             return status
-        if not hull_normal(ncon, contact_f, contact_i, layout, ints[I_HULL], normal):
+        if not hull_normal(s.ncon, s.contact_f, s.contact_i, s.layout, s.hull, normal):
             continue
         vx, vy = qvel0[dx], qvel0[dy]
         into = vx * normal[0] + vy * normal[1]
@@ -488,41 +537,41 @@ def bump_phase(m, d, n, bad_qacc, xmat, qpos, qvel, ints, floats, bump):
             continue
         qpos[:] = qpos0
         qvel[:] = 0.0
-        if ints[I_BUMP] == BUMP_BOUNCE:
-            back = (1.0 + floats[F_RESTITUTION]) * into
+        if s.bump == BUMP_BOUNCE:
+            back = (1.0 + s.restitution) * into
             qvel[dx] = vx - back * normal[0]
             qvel[dy] = vy - back * normal[1]
-        before = bad_qacc[0]
-        mj_forward(m, d)
-        if bad_qacc[0] != before:
+        before = s.bad_qacc[0]
+        mj_forward(s.m, s.d)
+        if s.bad_qacc[0] != before:
             return UNSTABLE
     return OK
 
 
 @njit(cache=True)
-def floating_thrust(a, u, m, d, ctrl, qpos, xmat, bad_qacc, ints, floats, qvel, bump):
+def floating_thrust(s, a, u):
     """floating.Floating.before_step for the clipped action a and the noise's uniforms
     u: the thrust during one substep, then none. Returns a status."""
-    nh, nv = factors(u, floats)
-    scale = floats[F_THRUST]
-    ctrl[ints[I_ACT0]] = demand(a[0], ints, floats) * nh * scale
-    ctrl[ints[I_ACT1]] = demand(a[1], ints, floats) * nv * scale
-    status = bump_phase(m, d, ints[I_N_FIRST], bad_qacc, xmat, qpos, qvel, ints, floats, bump)
-    ctrl[ints[I_ACT0]] = 0.0 * scale
-    ctrl[ints[I_ACT1]] = 0.0 * scale
+    nh, nv = factors(s, u)
+    scale = s.thrust_force
+    s.ctrl[s.act0] = demand(s, a[0]) * nh * scale
+    s.ctrl[s.act1] = demand(s, a[1]) * nv * scale
+    status = bump_phase(s, s.n_first)
+    s.ctrl[s.act0] = 0.0 * scale
+    s.ctrl[s.act1] = 0.0 * scale
     return status
 
 
 @njit(cache=True)
-def velocity_reading(v, noise, ints, floats):
+def velocity_reading(s, v, noise):
     """floating.Floating.sense_velocity on the velocity v (changed in place): plus the
     noise (an empty array: none), then, with the velocity code, the 0-255 code over
     +-full scale and back (np.clip as numpy's maximum then minimum)."""
     if noise.shape[0]:
         for i in range(v.shape[0]):
             v[i] = v[i] + noise[i]
-    if ints[I_VELOCITY_CODE]:
-        half, full = floats[F_LEVELS] / 2, floats[F_VELOCITY_FULL]
+    if s.velocity_code:
+        half, full = s.levels / 2, s.velocity_full
         for i in range(v.shape[0]):
             x = v[i] / full
             x = x if x > -1.0 else -1.0
@@ -533,8 +582,7 @@ def velocity_reading(v, noise, ints, floats):
 
 
 @njit(cache=True)
-def floating_step(action, u, noise, velocity_noise, m, d, flags, ctrl, qpos, xpos, xmat,
-                  sensordata, bad_qacc, ints, floats, velocity6, qvel, bump):
+def floating_step(s, action, u, noise, velocity_noise):
     """One agent step of the floating drive, the hooks' work in their order: the thrust,
     the coast (with the bump reading's velocity change), the goal test, the encoded
     readings and the velocity reading. Returns (status, substeps run, in the goal,
@@ -542,16 +590,122 @@ def floating_step(action, u, noise, velocity_noise, m, d, flags, ctrl, qpos, xpo
     nothing = np.empty(0)
     if not clip_unit(action):
         return NOT_FINITE, 0, False, nothing, nothing
-    status = floating_thrust(action, u, m, d, ctrl, qpos, xmat, bad_qacc, ints, floats,
-                             qvel, bump)
-    n = ints[I_N_FIRST]
+    status = floating_thrust(s, action, u)
+    n = s.n_first
     if status != OK:
         return status, n, False, nothing, nothing
-    status = bump_phase(m, d, ints[I_N_REST], bad_qacc, xmat, qpos, qvel, ints, floats, bump)
-    n += ints[I_N_REST]
+    status = bump_phase(s, s.n_rest)
+    n += s.n_rest
     if status != OK:
         return status, n, False, nothing, nothing
-    goal = goal_reached(qpos, xpos, xmat, ints, floats)
-    codes = readings(m, d, flags, sensordata, ints, floats, noise)
-    v = velocity(m, d, ints[I_BASE], floats[F_VELOCITY], velocity6)
-    return OK, n, goal, codes, velocity_reading(v, velocity_noise, ints, floats)
+    goal = goal_reached(s)
+    codes = readings(s, noise)
+    v = velocity(s.m, s.d, s.base, s.velocity, s.velocity6)
+    return OK, n, goal, codes, velocity_reading(s, v, velocity_noise)
+
+
+@njit(cache=True)
+def step(s, action, u, noise, velocity_noise, codes, vel):
+    """One agent step of the record's drive (two_wheel_step or floating_step) on a
+    finite action (clipped in place): the readings into codes and, floating, the
+    velocity into vel. Returns (status, substeps run, in the goal)."""
+    if s.kind == FLOATING:
+        status, n, goal, c, v = floating_step(s, action, u, noise, velocity_noise)
+        if status == OK:
+            vel[:] = v
+    else:
+        status, n, goal, c = two_wheel_step(s, action, u, noise)
+    if status == OK:
+        codes[:] = c
+    return status, n, goal
+
+
+# -- the task's random stream ---------------------------------------------------------
+# dm_control's tasks draw from a legacy RandomState (MT19937), which numba cannot take.
+# Its draws are doubles from one stream (random_sample; the legacy normal's polar method
+# takes its pairs from the same doubles), so the task's draws come from a buffer of the
+# stream's next doubles (`Stream`), used by the legacy algorithms (`gauss`); the
+# RandomState is wound to just past what was used whenever Python reads it
+# (navigation.TaskStream).
+
+#: A buffer's doubles; a step uses about a dozen.
+BUFFER = 8192
+#: Draws stop before a step when fewer doubles than this are left (a step's draws: 2
+#: uniforms and 2 per attempt of each pair of normals, whose attempts repeat with
+#: probability 1 - pi / 4).
+RESERVE = 64
+
+
+@structref.register
+class StreamType(types.StructRef):
+    def preprocess_fields(self, fields):
+        return tuple((name, types.unliteral(typ)) for name, typ in fields)
+
+
+class Stream(structref.StructRefProxy):
+    """A stretch of the task's RandomState as doubles: the buffer, the next double's
+    index, and legacy_gauss's cached value (has_gauss, gauss)."""
+
+
+structref.define_proxy(Stream, StreamType, ["buffer", "cursor", "has_gauss", "gauss"])
+
+
+@njit(cache=True)
+def stream_state(st):
+    """(cursor, has_gauss, gauss) of a Stream, for Python."""
+    return st.cursor, st.has_gauss, st.gauss
+
+
+@njit(cache=True)
+def stream_refill(st, buffer, has_gauss, value):
+    """The Stream starts over on `buffer` with legacy_gauss's cache (has_gauss, value)."""
+    st.buffer = buffer
+    st.cursor = 0
+    st.has_gauss = has_gauss
+    st.gauss = value
+
+
+@njit(cache=True)
+def gauss(st):
+    """numpy's legacy_gauss on the buffered doubles: the cached value if there is one,
+    else the polar method on pairs of doubles, keeping the second value."""
+    if st.has_gauss:
+        value = st.gauss
+        st.has_gauss = 0
+        st.gauss = 0.0
+        return value
+    buf = st.buffer
+    while True:
+        p = st.cursor
+        x1 = 2.0 * buf[p] - 1.0
+        x2 = 2.0 * buf[p + 1] - 1.0
+        st.cursor = p + 2
+        r2 = x1 * x1 + x2 * x2
+        if not (r2 >= 1.0 or r2 == 0.0):
+            break
+    f = math.sqrt(-2.0 * math.log(r2) / r2)
+    st.gauss = f * x1
+    st.has_gauss = 1
+    return f * x2
+
+
+@njit(cache=True)
+def task_draws(st, u, z, sensor_noise, vz, velocity_noise):
+    """One step's draws of the task, in its order: the action noise's two uniforms (u),
+    the sensor noise's normals (z: RandomState.normal(0, sd, size)), the floating
+    velocity noise's normals (vz); an array is empty where its noise is off. Returns
+    False, with the stream as it was, when the buffer might run out meanwhile."""
+    start, had, value = st.cursor, st.has_gauss, st.gauss
+    if start + u.shape[0] + 4 * (z.shape[0] + vz.shape[0]) + RESERVE > st.buffer.shape[0]:
+        return False
+    for i in range(u.shape[0]):
+        u[i] = st.buffer[st.cursor]
+        st.cursor += 1
+    for i in range(z.shape[0]):
+        z[i] = 0.0 + sensor_noise * gauss(st)
+    for i in range(vz.shape[0]):
+        vz[i] = 0.0 + velocity_noise * gauss(st)
+    if st.cursor > st.buffer.shape[0] - RESERVE:  # pragma: no cover - many rejections in a row
+        st.cursor, st.has_gauss, st.gauss = start, had, value
+        return False
+    return True

@@ -29,6 +29,8 @@ from tasks.config import TaskConfig
 
 # Section 3.2: a reading is encoded 0 (nothing) .. 255 (touching).
 SENSOR_LEVELS = 255
+#: Section 3.4: the agent and the intrinsic behaviours read the codes scaled into [0, 1].
+READING_SCALE = 1.0 / SENSOR_LEVELS
 
 #: A 3D robot tilted more than this (degrees) has fallen over: the step raises.
 MAX_TILT_DEGREES = 10.0
@@ -41,8 +43,6 @@ class ContractError(ValueError):
 # The per-step sensor arithmetic runs as small compiled loops (tasks.kernels): on 7-8
 # readings, numpy's per-call overhead cost more than the sensing itself. Same
 # operations in the same order, so the same bits (tested).
-_surface_distances = kernels.surface_distances
-_encode = kernels.encode
 
 _NO_NOISE = np.zeros(0)
 
@@ -54,7 +54,7 @@ def encode_range(distance, noise=_NO_NOISE, sensor_range=TaskConfig.sensor_range
     touching beam (d <= 0) reads 255. With noise (one value per reading), the noisy
     code clipped to [0, 255].
     """
-    return _encode(np.asarray(distance, dtype=np.float64), noise, float(SENSOR_LEVELS),
+    return kernels.encode(np.asarray(distance, dtype=np.float64), noise, float(SENSOR_LEVELS),
                    -SENSOR_LEVELS / sensor_range)
 
 
@@ -75,7 +75,8 @@ def substeps(seconds, timestep):
     return max(1, round(seconds / timestep))
 
 
-def _id(model, kind, name):
+def named_id(model, kind, name):
+    """The id of the robot's part `name` (its prefixed MJCF name), -1 for none."""
     return mujoco.mj_name2id(model.ptr, kind, PREFIX + name)
 
 
@@ -90,10 +91,10 @@ class Physics(dm_mujoco.Physics):
         super()._reload_from_data(data)
         m = self.model
         mjm = m.ptr
-        self._base = _id(m, mujoco.mjtObj.mjOBJ_BODY, "base")
+        self._base = named_id(m, mujoco.mjtObj.mjOBJ_BODY, "base")
         if self._base < 0:
             raise ContractError("no body named 'base' (the robot's base body)")
-        hull = _id(m, mujoco.mjtObj.mjOBJ_GEOM, "hull")
+        hull = named_id(m, mujoco.mjtObj.mjOBJ_GEOM, "hull")
         if hull < 0:
             raise ContractError("no geom named 'hull' (the bumper; its radius is the robot's)")
         #: The robot's radius in units: its hull's (sphere or cylinder) radius.
@@ -113,16 +114,7 @@ class Physics(dm_mujoco.Physics):
         self._act = data.ptr.act
         self._xpos, self._xmat = data.ptr.xpos[self._base], data.ptr.xmat[self._base]
         self._body_velocity = np.zeros(6)
-        self._sensor_bit = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
-        mjm.opt.disableflags |= self._sensor_bit
-        # What the compiled kernels (tasks.kernels) work on: the structs' addresses, views
-        # of the two ints they touch, and the settings arrays (the task fills its part).
-        self._m, self._d = mjm._address, data.ptr._address
-        self._flags = kernels.disable_flags(mjm)
-        self._bad_qacc = kernels.warning_count(data.ptr, mujoco.mjtWarning.mjWARN_BADQACC)
-        self._beam_span = np.array([self._beams.start, self._beams.stop], dtype=np.int64)
-        self._kints = np.zeros(kernels.N_INTS, dtype=np.int64)
-        self._kfloats = np.zeros(kernels.N_FLOATS)
+        mjm.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
         #: The room's timestep in seconds.
         self.timestep = float(mjm.opt.timestep)
         #: Substeps run so far, for benchmarks against raw mujoco.mj_step.
@@ -131,32 +123,53 @@ class Physics(dm_mujoco.Physics):
         self.goal_box = (np.array(goal[::2]), np.array(goal[1::2]))
         #: Seconds of simulated time per agent step; set by the task.
         self.step_seconds = 1.0
-        k, f = self._kints, self._kfloats
-        k[kernels.I_QYAW] = -1 if self._qyaw is None else self._qyaw
-        k[kernels.I_FREE] = self._free is not None
-        k[kernels.I_BASE] = self._base
-        k[kernels.I_BEAM0], k[kernels.I_BEAM1] = self._beam_span
-        f[kernels.F_UNIT], f[kernels.F_TIMESTEP] = UNIT, self.timestep
-        f[kernels.F_METRES_TO_UNITS], f[kernels.F_RADIUS] = 1.0 / UNIT, self.robot_radius
-        f[kernels.F_MIN_COS_TILT] = self._min_cos_tilt
-        f[kernels.F_X0], f[kernels.F_Y0] = self.goal_box[0]
-        f[kernels.F_X1], f[kernels.F_Y1] = self.goal_box[1]
-        #: The kernels' MuJoCo arguments, in their order (tasks.kernels).
-        self.kernel_args = (self._m, self._d, self._flags, self._ctrl, self._qpos, self._xpos,
-                            self._xmat, self._sensordata, self._bad_qacc, k, f)
+        # What the compiled kernels (tasks.kernels.Drive) work on: the structs' addresses,
+        # views of the ints they touch, MuJoCo's arrays, scratch; and the robot's part of
+        # the drive's settings (each drive's Physics and task add theirs).
+        self._m, self._d = mjm._address, data.ptr._address
+        self._flags = kernels.disable_flags(mjm)
+        self._bad_qacc = kernels.warning_count(data.ptr, mujoco.mjtWarning.mjWARN_BADQACC)
+        contact_f, contact_i, layout = kernels.contact_views(data.ptr)
+        self._handles = dict(
+            m=self._m, d=self._d, flags=self._flags, bad_qacc=self._bad_qacc,
+            ctrl=self._ctrl, qpos=self._qpos, qvel=self._qvel, act=self._act,
+            sensordata=self._sensordata, xpos=self._xpos, xmat=self._xmat,
+            velocity6=self._body_velocity, ncon=kernels.contact_count(data.ptr),
+            contact_f=contact_f, contact_i=contact_i, layout=layout, qpos0=np.empty(mjm.nq),
+            qvel0=np.empty(mjm.nv), normal=np.empty(2), plan=np.zeros(6))
+        (x0, y0), (x1, y1) = self.goal_box
+        self._settings = dict(
+            qyaw=-1 if self._qyaw is None else self._qyaw, free=self._free is not None,
+            base=self._base, beam0=self._beams.start, beam1=self._beams.stop, unit=UNIT,
+            timestep=self.timestep, metres_to_units=1.0 / UNIT, radius=self.robot_radius,
+            min_cos_tilt=self._min_cos_tilt, x0=x0, x1=x1, y0=y0, y1=y1)
+        self.record = None
         #: Rangefinders (the sensor noise draws one normal for each).
         self.n_beams = len(adr)
+
+    def set_drive(self, **settings):
+        """Sets some of the drive's settings (tasks.kernels.SETTINGS) and builds the
+        kernels' record of them (`record`, a tasks.kernels.Drive)."""
+        self._settings.update(settings)
+        self.record = kernels.drive_record(self._handles, self._settings)
+        return self.record
+
+    def drive_record(self):
+        """The kernels' record (tasks.kernels.Drive) at the current settings."""
+        return self.record if self.record is not None else self.set_drive()
 
     def _find_base_joints(self, m):
         """The base's joints: one free joint, or slide x and slide y (and hinge yaw)."""
         joints = [j for j in range(m.njnt) if m.jnt_bodyid[j] == self._base]
         kinds = [int(m.jnt_type[j]) for j in joints]
         self._free = self._qx = self._qy = self._qyaw = None
+        #: The base's free joint's first dof (x, then y), None for a planar base.
+        self.free_dof = None
         #: The base's planar joints by role ("x", "y", "yaw"), as joint ids.
         self.base_joints = {}
         if kinds == [mujoco.mjtJoint.mjJNT_FREE]:
             self._free = int(m.jnt_qposadr[joints[0]])
-            self._free_dof = int(m.jnt_dofadr[joints[0]])
+            self.free_dof = int(m.jnt_dofadr[joints[0]])
             self._rest_height = float(m.qpos0[self._free + 2])
             return
         for j, kind in zip(joints, kinds):
@@ -203,8 +216,8 @@ class Physics(dm_mujoco.Physics):
     def ranges(self):
         """Distance from the body surface along each beam, in units; inf where nothing is
         hit. Runs the sensor stage once, at the current state."""
-        return kernels.ranges(self._m, self._d, self._flags, self._sensordata, self._beam_span,
-                              1.0 / UNIT, self.robot_radius)
+        return kernels.ranges(self._m, self._d, self._flags, self._sensordata,
+                              self._beams.start, self._beams.stop, 1.0 / UNIT, self.robot_radius)
 
     def render(self, height=240, width=320, camera_id=-1, scene_option=None,
                scene_callback=None):
@@ -233,6 +246,8 @@ class Physics(dm_mujoco.Physics):
     def raise_for(self, status):
         """The PhysicsError of a kernel's status (tasks.kernels: UNSTABLE, TIPPED)."""
         t = self._mj[1].time
+        if status == kernels.NOT_FINITE:
+            raise ValueError("action must be finite")
         if status == kernels.UNSTABLE:
             raise control.PhysicsError(f"unstable simulation at t={t:.3f} s")
         raise control.PhysicsError(f"the robot tipped over at t={t:.3f} s "
@@ -261,14 +276,70 @@ class Physics(dm_mujoco.Physics):
         self.forward()
 
 
+class TaskStream:
+    """The task's RandomState as the compiled draws read it (tasks.kernels.Stream, in
+    `record`): `fill` saves the RandomState's state and draws a buffer of its next
+    doubles; `settle` winds it to just past the doubles the draws used, with
+    legacy_gauss's cached value as they left it. While a buffer is out, the RandomState
+    itself is ahead of what was used: `settled()` is the way to it."""
+
+    def __init__(self, random):
+        self._random = random
+        self.record = kernels.Stream(np.zeros(0), 0, 0, 0.0)
+        self._saved = None
+
+    def fill(self):
+        """A fresh buffer of the stream's next doubles (after settling the last)."""
+        self.settle()
+        self._saved = state = self._random.get_state()
+        kernels.stream_refill(self.record, self._random.random_sample(kernels.BUFFER),
+                              int(state[3]), float(state[4]))
+
+    def settle(self):
+        """The RandomState wound to just past the doubles used; the buffer is dropped."""
+        if self._saved is None:
+            return
+        cursor, has_gauss, value = kernels.stream_state(self.record)
+        self._random.set_state(self._saved)
+        if cursor:
+            self._random.random_sample(int(cursor))
+        state = self._random.get_state()
+        self._random.set_state(state[:3] + (int(has_gauss), float(value)))
+        self._saved = None
+
+    def ready(self):
+        """A buffer out (a fresh one unless one is)."""
+        if self._saved is None:
+            self.fill()
+
+    def settled(self):
+        """The RandomState, settled."""
+        self.settle()
+        return self._random
+
+    def draws(self, u, z, sensor_noise, vz, velocity_noise):
+        """One step's draws into u, z, vz (tasks.kernels.task_draws), from a new buffer
+        where the current one might run out."""
+        if self._saved is None or not kernels.task_draws(self.record, u, z, sensor_noise, vz,
+                                                         velocity_noise):
+            self.fill()
+            kernels.task_draws(self.record, u, z, sensor_noise, vz, velocity_noise)
+
+
 class Navigation(base.Task):
     """Reach the goal square from the jittered start; the robot class maps actions."""
 
     #: Action dimension, set by each robot.
     action_dim = 1
+    #: The drive's kernels (tasks.kernels.TWO_WHEEL, FLOATING); None: the hooks only.
+    kind = None
+    #: The observation's modalities in order, each a key of get_observation's.
+    observation_keys = ("range",)
 
     def __init__(self, config=TaskConfig(), *, time_scale=1.0, random=None):
         super().__init__(random=random)
+        #: The task's random stream as the compiled draws read it; `random` settles it.
+        self.stream = TaskStream(super().random)
         self.config = config
         #: Seconds of an agent step over the drive's own (1 for the paper's robots).
         self.time_scale = float(time_scale)
@@ -277,24 +348,39 @@ class Navigation(base.Task):
         self._jitter_xy = config.start_jitter_xy
         self._jitter_heading = np.deg2rad(config.start_jitter_heading)
 
+    @property
+    def random(self):
+        """The task's RandomState (dm_control's), wound to where the draws left it."""
+        return self.stream.settled()
+
+    def reseed(self, seed):
+        """A new random stream for the task: np.random.RandomState(seed)."""
+        self.stream = TaskStream(np.random.RandomState(seed))
+
+    #: The floating drive's velocity noise (the only draw after the range noise).
+    velocity_noise = 0.0
+
     # -- episode -------------------------------------------------------------
-    def kernel_settings(self, physics, n_first, n_rest, gains=(0.0, 0.0)):
-        """The task's part of the kernels' settings (tasks.kernels): the substeps of the
-        step's two phases, Section 3.2's code and noise, the drive's constants."""
-        k, f = physics._kints, physics._kfloats
-        k[kernels.I_N_FIRST], k[kernels.I_N_REST] = n_first, n_rest
-        f[kernels.F_LEVELS] = SENSOR_LEVELS
-        f[kernels.F_PER_UNIT] = -SENSOR_LEVELS / self.config.sensor_range
-        f[kernels.F_ACTION_NOISE] = self.action_noise
-        f[kernels.F_GAIN0], f[kernels.F_GAIN1] = gains
+    def kernel_settings(self, n_first, n_rest, gains=(0.0, 0.0)):
+        """The task's part of the kernels' settings (tasks.kernels.SETTINGS): the substeps
+        of the step's two phases, Section 3.2's code and noise, the drive's constants."""
+        return dict(n_first=n_first, n_rest=n_rest, levels=SENSOR_LEVELS,
+                    per_unit=-SENSOR_LEVELS / self.config.sensor_range,
+                    action_noise=self.action_noise, gain0=gains[0], gain1=gains[1])
+
+    def draw_buffers(self, n_beams):
+        """Arrays for one step's draws (u, z, vz), each empty where its noise is off."""
+        return (np.zeros(2 if self.action_noise > 0 else 0),
+                np.zeros(n_beams if self.sensor_noise > 0 else 0),
+                np.zeros(2 if self.velocity_noise > 0 else 0))
 
     def draws(self, physics):
         """One step's random draws, in the order the hooks make them: the action noise's
-        two uniforms (noise_factors), then the sensor noise's normals (sense)."""
-        u = self.random.random_sample(2) if self.action_noise > 0 else _NO_NOISE
-        if self.sensor_noise > 0:
-            return u, self.random.normal(0.0, self.sensor_noise, size=physics.n_beams)
-        return u, _NO_NOISE
+        two uniforms (noise_factors), the sensor noise's normals (sense), the floating
+        velocity noise's normals (sense_velocity)."""
+        u, z, vz = self._draws
+        self.stream.draws(u, z, self.sensor_noise, vz, self.velocity_noise)
+        return u, z, vz
 
     def compiled_action(self, action):
         """The action as a fresh float64 array, clipped to [-1, 1] as checked_action
@@ -310,18 +396,35 @@ class Navigation(base.Task):
 
     def compiled_step(self, action, physics):
         """The work of env.step's hooks (before_step, the substeps, after_step,
-        get_reward, get_observation, get_termination) in one compiled call: returns
-        (reward, observation, termination), or None where the drive has no such kernel
-        for this physics and config (then the hooks run)."""
-        return None
+        get_reward, get_observation, get_termination) in one compiled call
+        (tasks.kernels.step): returns (reward, observation, termination), or None where
+        the drive has no such kernel (then the hooks run)."""
+        if self.kind is None:
+            return None
+        a = self.compiled_action(action)
+        u, z, vz = self.draws(physics)
+        codes, velocity = self._sensed
+        status, n, goal = kernels.step(physics.record, a, u, z, vz, codes, velocity)
+        self.finish(n, goal, physics, status)
+        observation = collections.OrderedDict()
+        for key in self.observation_keys:
+            observation[key] = (codes if key == "range" else velocity).copy()
+        return (1.0 if goal else 0.0), observation, (0.0 if goal else None)
 
-    def finish_compiled(self, status, n, goal, physics, observation):
-        """The common end of a compiled step: counts, errors, the goal's reward."""
-        physics.substeps += n
+    def finish(self, substeps, goal, physics, status=kernels.OK):
+        """The end of compiled steps (this task's or a compiled loop's): the substeps
+        counted, MuJoCo's refusal raised, the goal kept for the reward."""
+        physics.substeps += substeps
         if status != kernels.OK:
             physics.raise_for(status)
         self._at_goal = goal
-        return (1.0 if goal else 0.0), observation, (0.0 if goal else None)
+
+    def start_drive(self, physics, **settings):
+        """The episode's drive settings (kernel_settings' and the drive's) into the
+        physics' kernel record, and the arrays of the step's draws and sensor values."""
+        physics.set_drive(kind=self.kind, **settings)
+        self._draws = self.draw_buffers(physics.n_beams)
+        self._sensed = (np.zeros(physics.n_beams), np.zeros(2))
 
     def initialize_episode(self, physics):
         x, y, heading = physics.start

@@ -11,7 +11,6 @@ Two ways to realise it, picked by the robot file's actuators (docs/adding_a_robo
 - `WheelPhysics`: two wheel hinges ``left_wheel`` and ``right_wheel`` rolling on the
   floor, under position servos whose targets follow the turn or the move (`diff_drive`).
 """
-import collections
 import math
 
 import numpy as np
@@ -40,12 +39,12 @@ class Physics(navigation.Physics):
     def _reload_from_data(self, data):
         super()._reload_from_data(data)
         m = self.model
-        ids = {name: navigation._id(m, navigation.mujoco.mjtObj.mjOBJ_ACTUATOR, name)
+        ids = {name: navigation.named_id(m, navigation.mujoco.mjtObj.mjOBJ_ACTUATOR, name)
                for name in ("forward", "turn", "grip")}
         if ids["forward"] < 0 or ids["turn"] < 0:
             raise navigation.ContractError(MISSING_ACTUATORS)
         self._forward, self._turn = ids["forward"], ids["turn"]
-        self._kints[kernels.I_ACT0], self._kints[kernels.I_ACT1] = self._forward, self._turn
+        self._settings.update(act0=self._forward, act1=self._turn)
         # Deadbeat servos: kv = driven inertia / timestep reaches the target speed in one
         # semi-implicit Euler step. The base's mass drives forward and grip, its yaw
         # inertia the turn.
@@ -86,27 +85,19 @@ class Physics(navigation.Physics):
 
 class TwoWheel(navigation.Navigation):
     action_dim = 1
+    kind = kernels.TWO_WHEEL
 
     def initialize_episode(self, physics):
         dt = physics.timestep
         self._n_turn = navigation.substeps(TURN_SECONDS * self.time_scale, dt)
         self._n_move = navigation.substeps(MOVE_SECONDS * self.time_scale, dt)
         physics.step_seconds = (self._n_turn + self._n_move) * dt
-        self.kernel_settings(physics, self._n_turn, self._n_move, (MAX_TURN, MAX_MOVE))
-        physics._kfloats[kernels.F_TOLERANCE] = BLOCKED_TOLERANCE
-        physics._kints[kernels.I_RAMP_FIRST] = physics.ramp_substeps(self._n_turn)
-        physics._kints[kernels.I_RAMP_REST] = physics.ramp_substeps(self._n_move)
-        self._plan = np.zeros(6)
+        self.start_drive(physics, **self.kernel_settings(self._n_turn, self._n_move,
+                                                         (MAX_TURN, MAX_MOVE)),
+                         tolerance=BLOCKED_TOLERANCE,
+                         ramp_first=physics.ramp_substeps(self._n_turn),
+                         ramp_rest=physics.ramp_substeps(self._n_move))
         super().initialize_episode(physics)
-
-    def compiled_step(self, action, physics):
-        a = self.compiled_action(action)
-        u, z = self.draws(physics)
-        status, n, goal, codes = kernels.two_wheel_step(a, u, z, *physics.kernel_args,
-                                                        self._plan, physics._act)
-        observation = collections.OrderedDict()
-        observation["range"] = codes
-        return self.finish_compiled(status, n, goal, physics, observation)
 
     def before_step(self, action, physics):
         (a,) = self.checked_action(action)
@@ -152,7 +143,7 @@ class WheelPhysics(navigation.Physics):
     def _reload_from_data(self, data):
         super()._reload_from_data(data)
         m = self.model
-        ids = [navigation._id(m, navigation.mujoco.mjtObj.mjOBJ_ACTUATOR, name)
+        ids = [navigation.named_id(m, navigation.mujoco.mjtObj.mjOBJ_ACTUATOR, name)
                for name in ("left_wheel", "right_wheel")]
         if min(ids) < 0:
             raise navigation.ContractError(MISSING_ACTUATORS)
@@ -166,12 +157,11 @@ class WheelPhysics(navigation.Physics):
         self.wheel_radius = float(m.geom_size[geoms[0], 0])
         self.half_track = float(abs(m.body_pos[bodies[0], 1] - m.body_pos[bodies[1], 1]) / 2)
         self._ramp_left = 0  # substeps left of the current phase's ramp
-        k, f = self._kints, self._kfloats
-        k[kernels.I_WHEELS] = 1
-        k[kernels.I_ACT0], k[kernels.I_ACT1] = ids
-        k[kernels.I_ACT_ADR0], k[kernels.I_ACT_ADR1] = self._wheel_act
-        k[kernels.I_WHEEL_Q0], k[kernels.I_WHEEL_Q1] = self._wheel_qpos
-        f[kernels.F_HALF_TRACK], f[kernels.F_WHEEL_RADIUS] = self.half_track, self.wheel_radius
+        self._settings.update(
+            wheels=1, act0=ids[0], act1=ids[1], act_adr0=self._wheel_act[0],
+            act_adr1=self._wheel_act[1], wheel_q0=self._wheel_qpos[0],
+            wheel_q1=self._wheel_qpos[1], half_track=self.half_track,
+            wheel_radius=self.wheel_radius)
 
     def ramp_substeps(self, n):
         """The substeps of an n-substep phase over which the wheels' targets move."""

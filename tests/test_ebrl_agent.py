@@ -107,9 +107,9 @@ def _run(seed, steps=3000):
 def test_same_seed_same_state_bit_for_bit():
     (a1, ag1), (a2, ag2) = _run(3), _run(3)
     assert np.array_equal(a1, a2)
-    for name in ("_inputs", "_action", "_utility", "_rel", "_time", "_next", "_prev", "_sums",
-                 "_var", "_table", "_table_w"):
-        assert np.array_equal(getattr(ag1, name), getattr(ag2, name)), name
+    for name in ("inputs", "actions", "utility", "rel", "time", "nxt", "prev", "sums",
+                 "variance", "table", "table_w"):
+        assert np.array_equal(getattr(ag1.memory, name), getattr(ag2.memory, name)), name
     assert ag1.memory_decisions == ag2.memory_decisions > 0
 
 
@@ -122,6 +122,7 @@ def test_kernels_are_compiled_once_and_cached():
     dispatchers = [v for v in vars(kernels).values() if hasattr(v, "py_func")]
     assert len(dispatchers) >= 10
     for d in dispatchers:
+        # numba's dispatcher names its cache only in a private field
         assert type(d._cache).__name__ == "FunctionCache", d.__name__
         assert not d.targetoptions.get("fastmath") and not d.targetoptions.get("parallel")
     code = ("import numpy as np, ebrl\n"

@@ -83,9 +83,9 @@ def test_agent_similarity_equals_reference():
         ag.act(x)
         ag.learn(0.0)
     x = rng.random(10)
-    stored = ag._inputs[:, : ag.size].T
+    stored = ag.memory.inputs[:, : ag.size].T
     want = ebrl.similarity(x, stored, ag.variance, groups, [0.7, 0.3])
-    np.testing.assert_allclose(ag._similarities(x), want, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(ag.similarities(x), want, rtol=0, atol=1e-12)
 
 
 def test_recall_eq1_by_hand():
@@ -159,7 +159,7 @@ def test_eq7_reliability_along_backward_links_both_signs():
     # Next trial: the input equals element 1, so memory acts as element 1 did.
     ag.act(np.array([1.0, 0.0]))
     assert ag.used_memory
-    referred = int(ag._referred)
+    referred = int(ag.referred)
     ag.learn(1.0, last=True)
     r = ag.reliability
     # element 1 and, back along its links, element 0: R + 0.5 * 1 * (1 - R), then the
@@ -176,7 +176,7 @@ def test_eq7_reliability_along_backward_links_both_signs():
         ag2.learn(1.0 if t == 1 else 0.0, last=t == 1)
     ag2.act(np.array([0.0, 0.0]))
     rel = ag2.reliability.copy()
-    j = int(ag2._referred)
+    j = int(ag2.referred)
     ag2.learn(-1.0)
     assert ag2.reliability[j] == pytest.approx(rel[j] * (1 - 0.5) * 0.5)
 

@@ -7,7 +7,7 @@ from ebrl import intrinsic, kernels
 
 
 def chains_are_consistent(ag):
-    nxt, prv = ag._next, ag._prev
+    nxt, prv = ag.memory.nxt, ag.memory.prev
     for k in range(ag.size):
         if nxt[k] >= 0:
             assert prv[nxt[k]] == k
@@ -38,7 +38,7 @@ def test_invariants_under_random_episodes(groups):
         assert ag.size <= cfg.memory_size
         if step % 97 == 0:
             chains_are_consistent(ag)
-            stored = ag._inputs[:, : ag.size].T
+            stored = ag.memory.inputs[:, : ag.size].T
             assert all(tuple(m) in fed for m in stored)  # inputs stored exactly as given
             np.testing.assert_allclose(ag.variance, np.maximum(stored.var(axis=0), 1e-6), rtol=1e-6)
             table, weights = ag.recall_table()
@@ -57,8 +57,8 @@ def test_forgetting_takes_the_least_reliable_and_splices_links():
     # one episode 0 -> 1 -> 2 -> 3; element 0 is oldest, least reliable.
     ag.act(np.array([9.0]))
     ag.learn(0.0)
-    assert ag._inputs[0, 0] == 9.0  # slot 0 reused for the new element
-    assert ag._prev[1] == -1 and ag._next[3] == 0 and ag._prev[0] == 3
+    assert ag.memory.inputs[0, 0] == 9.0  # slot 0 reused for the new element
+    assert ag.memory.prev[1] == -1 and ag.memory.nxt[3] == 0 and ag.memory.prev[0] == 3
     np.testing.assert_allclose(ag.variance, np.var([9.0, 1, 2, 3]))
 
 
@@ -108,15 +108,14 @@ def test_memory_arrays_are_disjoint_and_initialised(memory_size, obs_dim, groups
     cfg = ebrl.Config(memory_size=memory_size, recall_size=7)
     ag = ebrl.Agent(cfg, obs_dim, 2, intrinsic.RandomWalk(2), seed=0,
                     groups=groups, group_weights=None if groups is None else [0.7, 0.3])
-    arrays = [ag._inputs, ag._action, ag._utility, ag._rel, ag._time, ag._next, ag._prev,
-              ag._sums, ag._var, ag._sim, ag._table, ag._table_w, ag._decided]
+    st = ag.memory
+    arrays = [st.inputs, st.actions, st.utility, st.rel, st.time, st.nxt, st.prev,
+              st.sums, st.variance, st.sim, st.table, st.table_w, st.decided, st.obs, st.action]
     for i, a in enumerate(arrays):
         assert a.flags.c_contiguous and a.flags.writeable
         assert not any(np.shares_memory(a, b) for b in arrays[i + 1:])
-    assert (ag._next == -1).all() and (ag._prev == -1).all() and (ag._table == -1).all()
-    assert not ag._inputs.any() and not ag._sums.any() and not ag._decided.any()
-    assert ag._inputs.shape == (obs_dim, memory_size) and ag._action.shape == (memory_size, 2)
-    # The kernels' argument tuples hold these very arrays (updated in place, never rebound).
-    held = arrays + [ag._group_of, ag._group_size, ag._group_weight]
-    assert all(any(a is b for b in held)
-               for a in ag._act_args + ag._learn_args if isinstance(a, np.ndarray))
+    assert (st.nxt == -1).all() and (st.prev == -1).all() and (st.table == -1).all()
+    assert not st.inputs.any() and not st.sums.any() and not st.decided.any()
+    assert st.inputs.shape == (obs_dim, memory_size) and st.actions.shape == (memory_size, 2)
+    # The record holds these very arrays: a read-out from Python shares their memory.
+    assert np.shares_memory(st.inputs, ag.memory.inputs) and ag.action_dim == 2

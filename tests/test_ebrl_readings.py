@@ -67,11 +67,11 @@ def stream(name, steps=3000, explicit=False, **switches):
     return actions, ag
 
 
-STATE = ("_utility", "_rel", "_time", "_next", "_prev")
+STATE = ("utility", "rel", "time", "nxt", "prev")
 
 
 def digests(actions, ag):
-    state = b"".join(np.ascontiguousarray(getattr(ag, k)).tobytes() for k in STATE)
+    state = b"".join(np.ascontiguousarray(getattr(ag.memory, k)).tobytes() for k in STATE)
     return (hashlib.sha256(np.round(actions, 9).tobytes()).hexdigest(),
             hashlib.sha256(state).hexdigest())
 
@@ -88,8 +88,8 @@ def test_protocol_3_readings_reproduce_the_agent_before_the_switches(name):
     assert digests(actions, ag) == BEFORE[name]
     actions2, ag2 = stream(name, explicit=True, **PROTOCOL3)
     assert np.array_equal(actions, actions2)
-    for k in STATE + ("_inputs", "_action", "_table", "_table_w", "_var"):
-        assert np.array_equal(getattr(ag, k), getattr(ag2, k)), k
+    for k in STATE + ("inputs", "actions", "table", "table_w", "variance"):
+        assert np.array_equal(getattr(ag.memory, k), getattr(ag2.memory, k)), k
 
 
 @pytest.mark.parametrize("name", STREAMS)
@@ -152,7 +152,7 @@ def _step(ag, x, reward=0.0, last=False):
 
 
 def _kept_times(ag):
-    return sorted(ag._time[: ag.size].tolist())
+    return sorted(ag.memory.time[: ag.size].tolist())
 
 
 @pytest.mark.parametrize("forgetting,forgotten", [("least_reliable", 1), ("oldest", 0)])
@@ -163,11 +163,11 @@ def test_forgetting_least_reliable_or_oldest(forgetting, forgotten):
     _step(ag, 0)
     _step(ag, 5, 1.0, last=True)  # trial 1: elements 0 (x 0) and 1 (x 5), rewarded
     _step(ag, 0, 1.0, last=True)  # trial 2: memory acts as element 0; eq 7 from it
-    assert ag._referred == -1 and ag.memory_decisions == 1
+    assert ag.referred == -1 and ag.memory_decisions == 1
     # R_0 = (0.25 + 0.5 * 0.75) * 0.5, R_1 = 0.5 * 0.5, R_2 = 0.5 (stored at time 2).
     np.testing.assert_array_equal(ag.reliability, [0.3125, 0.25, 0.5])
     _step(ag, 9)  # memory full: one element is forgotten, its slot reused (time 3)
-    assert ag._time[forgotten] == 3
+    assert ag.memory.time[forgotten] == 3
     assert _kept_times(ag) == sorted({0, 1, 2, 3} - {forgotten})
 
 
@@ -215,13 +215,13 @@ def test_episode_continuing_keeps_the_link_across_a_trial_end(episode):
     _step(ag, 2)
     _step(ag, 3, 1.0, last=True)
     if episode == "trial":
-        assert ag._prev[2] == -1 and ag._next[1] == -1
+        assert ag.memory.prev[2] == -1 and ag.memory.nxt[1] == -1
         np.testing.assert_array_equal(ag.utility, [0, 0, 0.5, 1])
     else:
-        assert ag._prev[2] == 1 and ag._next[1] == 2
+        assert ag.memory.prev[2] == 1 and ag.memory.nxt[1] == 2
         np.testing.assert_array_equal(ag.utility, [0.125, 0.25, 0.5, 1])
-    assert ag._tail == (-1 if episode == "trial" else 3)
-    assert ag._referred == -1 and not ag.recall_table()[0].size  # emptied either way
+    assert ag.tail == (-1 if episode == "trial" else 3)
+    assert ag.referred == -1 and not ag.recall_table()[0].size  # emptied either way
 
 
 @pytest.mark.parametrize("episode", ["trial", "continuing"])
@@ -250,28 +250,28 @@ def test_recall_table_kept_or_emptied_at_a_trial_end(recall):
     for x in (0, 5, 0):
         _step(ag, x)
     ag.act(np.array([5.0]))
-    table, weights = ag._table.copy(), ag._table_w.copy()
+    table, weights = ag.memory.table.copy(), ag.memory.table_w.copy()
     assert table[0] == 1 and weights[0] == 1.0  # x = 5 recalls element 1 exactly
     ag.learn(0.0, last=True)
     if recall == "empty":
-        assert (ag._table == -1).all()
+        assert (ag.memory.table == -1).all()
         table[:] = -1
     else:
-        assert ag._table.tolist() == table.tolist() and ag._table_w.tolist() == weights.tolist()
-    sim = ag._similarities(np.array([5.0]))  # the next act's similarities
-    kernels.recall(sim, ag.size, ag._next, table, weights, 0.5)
+        assert ag.memory.table.tolist() == table.tolist() and ag.memory.table_w.tolist() == weights.tolist()
+    sim = ag.similarities(np.array([5.0]))  # the next act's similarities
+    kernels.recall(sim, ag.size, ag.memory.nxt, table, weights, 0.5)
     ag.act(np.array([5.0]))
-    assert ag._table.tolist() == table.tolist() and ag._table_w.tolist() == weights.tolist()
+    assert ag.memory.table.tolist() == table.tolist() and ag.memory.table_w.tolist() == weights.tolist()
     # By hand: V = var(0, 5, 0, 5) = 6.25, S(5, 0) = 1 - sqrt(25 / 6.25 / 2) = 1 - sqrt 2,
     # S(5, 5) = 1. "keep": the entry on element 1 (W 1) reaches element 2 with eq 1's
     # 1 + 0.5 (1 - sqrt 2 - 1) = 1 - sqrt(2) / 2, above element 2's own similarity.
     # "empty": elements 1 and 3, then the first of 0 and 2 (equal weights).
     if recall == "keep":
-        assert ag._table.tolist() == [1, 3, 2]
-        np.testing.assert_allclose(ag._table_w, [1, 1, 1 - np.sqrt(2) / 2], rtol=1e-15)
+        assert ag.memory.table.tolist() == [1, 3, 2]
+        np.testing.assert_allclose(ag.memory.table_w, [1, 1, 1 - np.sqrt(2) / 2], rtol=1e-15)
     else:
-        assert ag._table.tolist() == [1, 3, 0]
-        np.testing.assert_allclose(ag._table_w, [1, 1, 1 - np.sqrt(2)], rtol=1e-15)
+        assert ag.memory.table.tolist() == [1, 3, 0]
+        np.testing.assert_allclose(ag.memory.table_w, [1, 1, 1 - np.sqrt(2)], rtol=1e-15)
 
 
 @pytest.mark.parametrize("scope", ["to_start", "decided_only"])
@@ -283,10 +283,10 @@ def test_eq7_scope_to_start_or_decided_only(scope):
     ag = _agent(memory_size=8, time_discount=0.5, reliability_rate=0.5, eq7_scope=scope)
     for x in (0, 1, 2):
         _step(ag, x, 1.0 if x == 2 else 0.0, last=x == 2)
-    assert not ag._decided.any()
+    assert not ag.memory.decided.any()
     _step(ag, 0)
-    assert ag._referred == 0
-    assert ag._decided[:5].tolist() == ([True, False, False, False, False]
+    assert ag.referred == 0
+    assert ag.memory.decided[:5].tolist() == ([True, False, False, False, False]
                                         if scope == "decided_only" else [False] * 5)
     before = ag.reliability.copy()
     _step(ag, 2, 1.0, last=True)
@@ -298,7 +298,7 @@ def test_eq7_scope_to_start_or_decided_only(scope):
     else:
         want = [up(before[0]), decay(before[1]), up(before[2]), decay(before[3]), 0.5]
     np.testing.assert_array_equal(ag.reliability, want)
-    assert not ag._decided.any()  # cleared at the trial's end
+    assert not ag.memory.decided.any()  # cleared at the trial's end
 
 
 def test_eq7_decided_only_counts_an_element_once_and_forgets_its_flag():
@@ -310,11 +310,11 @@ def test_eq7_decided_only_counts_an_element_once_and_forgets_its_flag():
     ag = _agent(memory_size=2, time_discount=0.5, eq7_scope="decided_only")
     _step(ag, 0, 1.0, last=True)
     ag.act(np.array([0.0]))  # memory acts as element 0 ...
-    assert ag._decided[0]
+    assert ag.memory.decided[0]
     ag.learn(0.0)            # ... which is stored into slot 1
     ag.act(np.array([0.0]))  # element 0 again (element 1's utility is 0)
     ag.learn(0.0)            # full: slot 0 (least reliable) is reused
-    assert ag._time[0] == 2 and not ag._decided[0]
+    assert ag.memory.time[0] == 2 and not ag.memory.decided[0]
 
 
 def test_eq9_dead_zone_keep_repeats_the_previous_acceleration():
@@ -395,11 +395,11 @@ def test_the_compiled_fallback_is_the_python_one(behaviour, dead_zone, mode):
     actions, choices, held accelerations and draws."""
     compiled = intrinsic.fallback_for(behaviour, "avoidance", 0.3, eq9_dead_zone=dead_zone,
                                       random_in_avoidance=mode)
-    assert compiled._kind is not None
+    assert compiled.compiled
     avoid, dim = intrinsic.BEHAVIOURS[behaviour]
     python = intrinsic.Intrinsic(lambda s, **kw: avoid(s, **kw), dim, 0.3,
                                  random_in_avoidance=mode, hold=compiled.last is not None)
-    assert python._kind is None
+    assert not python.compiled
     r1, r2, readings = np.random.default_rng(4), np.random.default_rng(4), np.random.default_rng(9)
     n = 7 if behaviour == "eq8" else 8
     for step in range(2000):

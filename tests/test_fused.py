@@ -19,17 +19,17 @@ def _pair(robot, condition, seed=0):
 def _state(env, agent):
     """What the next steps depend on: the agent's memory and streams, the task's stream,
     the physics."""
-    a = agent
-    arrays = [a._inputs, a._action, a._utility, a._rel, a._time, a._next, a._prev, a._sums,
-              a._var, a._table, a._table_w, a._decided, env.physics.data.qpos,
+    a, m = agent, agent.memory
+    arrays = [m.inputs, m.actions, m.utility, m.rel, m.time, m.nxt, m.prev, m.sums,
+              m.variance, m.table, m.table_w, m.decided, env.physics.data.qpos,
               env.physics.data.qvel, env.physics.data.act, env.physics.data.ctrl]
     last = getattr(a.fallback, "last", None)
     if last is not None:
         arrays.append(last)
-    scalars = (a.steps, a._size, a._tail, a._referred, a.memory_decisions,
+    scalars = (a.steps, a.size, a.tail, a.referred, a.memory_decisions,
                a.fallback_decisions, a.decision, a.used_memory,
-               getattr(a.fallback, "choice", None), env._step_count, env._reset_next_step,
-               env.physics.substeps, str(a.rng.bit_generator.state))
+               getattr(a.fallback, "choice", None), env.physics.substeps,
+               str(a.rng.bit_generator.state))
     task_state = env.task.random.get_state()
     return ([x.tobytes() for x in arrays], scalars,
             (task_state[1].tobytes(),) + tuple(task_state[2:]))
@@ -39,33 +39,23 @@ def _state(env, agent):
                                          ("diff_drive", 1200), ("hovercraft", 1500)])
 @pytest.mark.parametrize("condition", ["avoidance", "random"])
 def test_a_stretch_is_the_step_by_step_loop(robot, steps, condition):
+    """protocol.Trials step by step (Agent.act, Environment.step, Agent.learn) against
+    the compiled stretches over the same functions, in stretches of at most 700 steps
+    (a stretch also resumes where one stopped), run in two halves (a loop resumes)."""
     spec, ((env1, agent1), (env2, agent2)) = _pair(robot, condition)
-    assert fused.Loop.supports(env2, agent2)
     keys = tuple(k for k, _ in spec.entry.modalities)
-    trace1, trace2 = (np.zeros((steps + 1, 2), dtype=np.float32) for _ in range(2))
-    ts1, ts2 = env1.reset(), env2.reset()
-    goals1 = []
-    for step in range(1, steps + 1):
-        obs, readings = protocol.agent_input(ts1.observation, keys)
-        ts1 = env1.step(agent1.act(obs, readings=readings))
-        agent1.learn(ts1.reward, ts1.last())
-        trace1[step] = env1.physics.robot_pose()[:2]
-        if ts1.last():
-            goals1.append(step)
-            ts1 = env1.reset()
-    loop, step, goals2, observation = fused.Loop(env2, agent2, trace2), 0, [], ts2.observation
-    while step < steps:
-        # stretches of at most 700 steps: a stretch also resumes where one stopped
-        done, goal = loop.stretch(step + 1, min(700, steps - step), observation)
-        step, observation = step + done, None
-        if goal:
-            goals2.append(step)
-            observation = env2.reset().observation
-    assert goals1 == goals2
-    assert trace1.tobytes() == trace2.tobytes()
+    one = protocol.Trials(env1, agent1, keys, steps, fused=False)
+    two = protocol.Trials(env2, agent2, keys, steps, stretch=700)
+    assert two.fused and not one.fused
+    for t in (one, two):
+        t.run(steps // 2).run(steps - steps // 2)
+    assert len(one.trial_ends) >= 1 or robot in ("diff_drive", "hovercraft")
+    assert one.trial_ends == two.trial_ends
+    assert one.trace.tobytes() == two.trace.tobytes()
     assert _state(env1, agent1) == _state(env2, agent2)
-    for key in ts1.observation:  # the last observation, as the next stretch would read it
-        assert np.array_equal(ts1.observation[key], loop.io[1 if key == "range" else 2])
+    last = two.observation  # the last observation, as the next stretch reads it
+    for key in one.observation:
+        assert np.array_equal(one.observation[key], last[key])
     env1.close(), env2.close()
 
 
@@ -83,23 +73,39 @@ def test_runs_are_the_same_fused_or_not_and_reach_the_goal():
 def test_the_task_stream_is_numpys_legacy_stream():
     """The buffered doubles through the legacy normal and back: the RandomState ends
     where its own calls leave it, the cached normal included."""
+    from tasks import kernels
+    from tasks.navigation import TaskStream
     ours, theirs = np.random.RandomState(3), np.random.RandomState(3)
-    stream = fused._StreamState(ours)
+    stream = TaskStream(ours)
     for n_z in (7, 8, 3):
-        stream.fill()
         u, z, vz = np.zeros(2), np.zeros(n_z), np.zeros(2)
         for _ in range(50):
-            assert fused._task_draws(stream.buffer, stream.cursor, stream.cache, 0.1, 0.05,
-                                     u, z, vz)
+            stream.draws(u, z, 0.1, vz, 0.05)
             want_u = theirs.random_sample(2)
             want_z = theirs.normal(0.0, 0.1, size=n_z)
             want_vz = theirs.normal(0.0, 0.05, size=2)
             assert (u.tobytes(), z.tobytes(), vz.tobytes()) == (
                 want_u.tobytes(), want_z.tobytes(), want_vz.tobytes())
-        stream.settle()
-        a, b = ours.get_state(), theirs.get_state()
+        a, b = stream.settled().get_state(), theirs.get_state()
         assert a[1].tobytes() == b[1].tobytes() and a[2:] == b[2:]
     assert ours.normal() == theirs.normal() and ours.random_sample() == theirs.random_sample()
+    # a buffer that might run out refuses the step and leaves itself as it was
+    stream.fill()
+    st = stream.record
+    kernels.stream_refill(st, np.zeros(kernels.RESERVE + 3), 0, 0.0)
+    assert not kernels.task_draws(st, np.zeros(2), np.zeros(8), 0.1, np.zeros(0), 0.0)
+    assert kernels.stream_state(st) == (0, 0, 0.0)
+
+
+def test_an_observation_the_agent_refuses_is_the_same_error_in_a_stretch():
+    spec, ((env1, agent1), (env2, agent2)) = _pair("two_wheel", "avoidance")
+    with pytest.raises(ValueError, match="NaN or inf"):
+        agent1.act(np.full(agent1.obs_dim, np.nan))
+    loop = fused.Loop(env2, agent2, np.zeros((11, 2), dtype=np.float32))
+    env2.reset()
+    with pytest.raises(ValueError, match="NaN or inf"):
+        loop.stretch(1, 10, {"range": np.full(env2.physics.n_beams, np.nan)})
+    env1.close(), env2.close()
 
 
 def test_what_a_stretch_cannot_run_takes_the_step_by_step_loop():
@@ -110,6 +116,9 @@ def test_what_a_stretch_cannot_run_takes_the_step_by_step_loop():
     agent = protocol.make_agent(ebrl_spec, env)
     assert fused.Loop.supports(env, agent)
     assert not fused.Loop.supports(env, agent, on_step=lambda *a: None)
+    assert not fused.Loop.supports(env, agent, keys=("range", "touch"))
+    env.compiled = False  # dm_control's hooks: no compiled drive to iterate
+    assert not fused.Loop.supports(env, agent)
     env.close()
 
 

@@ -27,7 +27,7 @@ def test_check_env_passes(env_id):
         warnings.filterwarnings("ignore", message=".*Box observation space m.*infinity")
         check_env(env.unwrapped)
     obs, info = env.reset(seed=0)
-    dm = env.unwrapped._env
+    dm = env.unwrapped.dm_env
     for key, spec in dm.observation_spec().items():  # spaces match the dm_env specs
         assert env.observation_space[key].shape == spec.shape == obs[key].shape
     assert env.action_space.shape == dm.action_spec().shape

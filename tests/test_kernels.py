@@ -28,7 +28,7 @@ def _pair(robot, **fields):
 ])
 def test_the_compiled_step_is_the_hooks_step_for_step(robot, fields):
     compiled, hooks = _pair(robot, **fields)
-    assert compiled._task.compiled_step  # the drive has a compiled step
+    assert compiled.task.kind is not None  # the drive has a compiled step
     dim = compiled.action_spec().shape[0]
     rng = np.random.default_rng(3)
     ts = [compiled.reset(), hooks.reset()]
@@ -87,8 +87,10 @@ def test_the_struct_views_are_the_fields_they_name():
 def test_the_contact_views_read_mujocos_contacts():
     env = tasks.load("floating", seed=0, bump="grip")
     physics = env.physics
-    m, d = physics.model.ptr, physics.data.ptr
-    ncon, floats, ints, layout = physics.bump_args[:4]
+    d = physics.data.ptr
+    ncon = kernels.contact_count(d)
+    floats, ints, layout = kernels.contact_views(d)
+    hull_id = physics.hull
     env.reset()
     # the puck pressed into the west wall, then into the south-west corner
     for x, y in ((physics.robot_radius - 0.2, 30.0),
@@ -96,7 +98,7 @@ def test_the_contact_views_read_mujocos_contacts():
         physics.set_robot_pose(x, y)
         assert d.ncon >= 1 and ncon[0] == d.ncon
         normal = np.zeros(2)
-        assert kernels.hull_normal(ncon, floats, ints, layout, physics._kints[kernels.I_HULL],
+        assert kernels.hull_normal(ncon, floats, ints, layout, hull_id,
                                    normal)
         for k in range(d.ncon):
             c = d.contact[k]
@@ -104,12 +106,12 @@ def test_the_contact_views_read_mujocos_contacts():
             assert floats[f: f + 9].tolist() == c.frame.tolist()
             assert ints[k * layout[2] + layout[3]] == c.geom1
             assert ints[k * layout[2] + layout[4]] == c.geom2
-        hull = [k for k in range(d.ncon) if physics._kints[kernels.I_HULL] in d.contact[k].geom][0]
-        sign = -1.0 if d.contact[hull].geom1 == physics._kints[kernels.I_HULL] else 1.0
+        hull = [k for k in range(d.ncon) if hull_id in d.contact[k].geom][0]
+        sign = -1.0 if d.contact[hull].geom1 == hull_id else 1.0
         assert normal.tolist() == (sign * d.contact[hull].frame[:2]).tolist()
         assert normal[0] > 0.5  # from the wall into the robot: east
     # nothing touched: no normal
     physics.set_robot_pose(*physics.start[:2])
     assert d.ncon == 0 and not kernels.hull_normal(ncon, floats, ints, layout,
-                                                   physics._kints[kernels.I_HULL], np.zeros(2))
+                                                   hull_id, np.zeros(2))
     env.close()

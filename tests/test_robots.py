@@ -39,8 +39,9 @@ def test_pose_and_velocity_read_outs_for_slide_and_free_joints(robot):
     env = tasks.load(robot, seed=0, start_jitter=False, sensor_noise=0.0, action_noise=0.0)
     env.reset()
     physics = env.physics
-    assert (physics._free is not None) == (robot in ("diff_drive", "hovercraft"))
-    heading = 0.7 if physics._qyaw is not None or physics._free is not None else 0.0
+    free = physics.free_dof is not None
+    assert free == (robot in ("diff_drive", "hovercraft"))
+    heading = 0.7 if "yaw" in physics.base_joints or free else 0.0
     if robot == "hovercraft":
         heading = 0.0  # its gyro holds the heading at 0
     physics.set_robot_pose(41.5, 33.25, heading)
@@ -48,8 +49,8 @@ def test_pose_and_velocity_read_outs_for_slide_and_free_joints(robot):
     assert physics.tilt() == pytest.approx(0.0, abs=1e-9)
     # The body velocity, in units per agent step, against the joints' own velocity.
     v = np.array([0.3, -0.2])  # m/s
-    if physics._free is not None:
-        physics.data.qvel[physics._free_dof: physics._free_dof + 2] = v  # free: x, y first
+    if free:
+        physics.data.qvel[physics.free_dof: physics.free_dof + 2] = v  # free: x, y first
     else:
         physics.data.qvel[[physics.model.jnt_dofadr[physics.base_joints[k]] for k in "xy"]] = v
     physics.forward()
@@ -63,7 +64,6 @@ def test_sensors_once_per_step_read_as_sensors_every_substep():
     MuJoCo's every-substep sensor stage, bit for bit."""
     for robot in tasks.ROBOTS:
         once, every = tasks.load(robot, seed=1), tasks.load(robot, seed=1)
-        every.physics._sensor_bit = 0  # toggles nothing: sensors on every substep
         every.physics.model.ptr.opt.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
         once.reset(), every.reset()
         rng = np.random.default_rng(0)

@@ -7,7 +7,7 @@ from absl.testing import absltest
 from dm_env import test_utils
 
 import tasks
-from tasks import navigation
+from tasks import kernels, navigation
 
 # The room as the issue states it, written out independently of room.xml:
 # field 0..90 x 0..60 units, obstacles as (xmin, xmax, ymin, ymax).
@@ -327,7 +327,7 @@ def test_compiled_sensing_equals_the_numpy_formula_bit_for_bit():
     np.maximum(code, 0.0, out=code)
     noise = rng.normal(0.0, 12.75, size=code.shape)
     noisy = np.minimum(np.maximum(code + noise, 0.0), 255)
-    got = navigation._surface_distances(raw, 1.0 / 0.1, radius)
+    got = kernels.surface_distances(raw, 1.0 / 0.1, radius)
     assert got.tobytes() == distance.tobytes()
     assert navigation.encode_range(got).tobytes() == code.tobytes()
     assert navigation.encode_range(got, noise).tobytes() == noisy.tobytes()

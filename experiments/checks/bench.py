@@ -17,7 +17,7 @@ import mujoco
 import numpy as np
 
 from ebrl.benchmark import reference_pass
-from experiments.running import fused, protocol
+from experiments.running import protocol
 
 
 def measure(robot, steps, blocks=5):
@@ -67,17 +67,16 @@ def measure(robot, steps, blocks=5):
             m.opt.disableflags |= bit
         rows.append((clock() - t0, t_env, t_agent, whole))
     # The protocol's own loop: stretches of steps in one compiled call (experiments.running.fused).
+    env.close()
     fused_times = []
-    if fused.Loop.supports(env, agent):
-        loop = fused.Loop(env, agent, np.empty((steps + 1, 2), dtype=np.float32))
-        observation = ts.observation
+    spec = protocol.RunSpec(robot, "avoidance", 0, config.memory_size + 200 + blocks * steps)
+    env = tasks.load(spec.entry, seed=0)
+    trials = protocol.Trials(env, protocol.make_agent(spec, env), keys, spec.steps)
+    if trials.fused:
+        trials.run(config.memory_size + 200)  # fill the memory first, as above
         for _ in range(blocks):
-            done, started = 0, clock()
-            while done < steps:
-                k, goal = loop.stretch(done + 1, steps - done, observation)
-                done, observation = done + k, None
-                if goal:
-                    observation = env.reset().observation
+            started = clock()
+            trials.run(steps)
             fused_times.append(clock() - started)
     env.close()
     raw, t_env, t_agent, whole = (statistics.median(col) * 1e6 / steps for col in zip(*rows))

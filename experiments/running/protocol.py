@@ -166,8 +166,8 @@ def make_agent(spec, env):
 def _reading_scale():
     # Imported here, not at the top: importing tasks loads MuJoCo and dm_control, which
     # the command line's checks do without.
-    from tasks.navigation import SENSOR_LEVELS
-    return 1.0 / SENSOR_LEVELS
+    from tasks.navigation import READING_SCALE
+    return READING_SCALE
 
 
 def agent_input(observation, keys=("range",)):
@@ -191,59 +191,100 @@ def agent_input(observation, keys=("range",)):
     return obs, readings
 
 
+class Trials:
+    """The protocol's loop over an environment and an agent: the agent learns at every
+    step; at the goal the trial ends (the agent's learn(last=True)) and the next starts
+    from a reset. `run(steps)` goes on from where the last call stopped, step by step
+    (act, env.step, learn) or, where experiments.running.fused supports the pair (EBRL
+    with a compiled fallback, a compiled drive, no on_step), in stretches of one compiled
+    call each: the same bits (tests/test_fused.py). `stretch` caps a stretch's length.
+
+    trace[k]: the position after step k (k = 0: the first start); starts[i]: the start of
+    trial i; trial_ends[i]: the step at which trial i ended. Trial i's path is starts[i]
+    then trace[end(i-1)+1 : end(i)+1]."""
+
+    def __init__(self, env, agent, keys, budget, *, fused=True, on_step=None, stretch=None):
+        self.env, self.agent, self.keys, self.on_step = env, agent, keys, on_step
+        self.trace = np.empty((budget + 1, 2), dtype=np.float32)
+        self.starts, self.trial_ends, self.step = [], [], 0
+        self._ts = env.reset()
+        self._pose = env.physics.robot_pose
+        self.starts.append(self._pose()[:2])
+        self.trace[0] = self.starts[0]
+        self._loop = None
+        if fused:
+            from experiments.running import fused as fused_loop
+            if fused_loop.Loop.supports(env, agent, on_step, keys):
+                self._loop = fused_loop.Loop(env, agent, self.trace, keys)
+        self._stretch = stretch
+        self._observation = self._ts.observation
+
+    @property
+    def fused(self):
+        """True when the loop runs in compiled stretches."""
+        return self._loop is not None
+
+    @property
+    def observation(self):
+        """The last observation, as the next step reads it."""
+        if self._loop is not None and self._observation is None:
+            return self._loop.last_observation
+        return self._ts.observation
+
+    def _trial_ended(self):
+        self.trial_ends.append(self.step)
+        self._ts = self.env.reset()
+        self._observation = self._ts.observation
+        self.starts.append(self._pose()[:2])
+
+    def run(self, steps):
+        """`steps` more protocol steps."""
+        end = self.step + steps
+        while self._loop is not None and self.step < end:
+            n = end - self.step if self._stretch is None else min(self._stretch, end - self.step)
+            done, goal = self._loop.stretch(self.step + 1, n, self._observation)
+            self.step, self._observation = self.step + done, None
+            if goal:
+                self._trial_ended()
+        env, agent, on_step = self.env, self.agent, self.on_step
+        while self.step < end:
+            self.step += 1
+            obs, readings = agent_input(self._ts.observation, self.keys)
+            self._ts = env.step(agent.act(obs, readings=readings))
+            agent.learn(self._ts.reward, self._ts.last())
+            self.trace[self.step] = self._pose()[:2]
+            if self._ts.last():
+                self._trial_ended()
+            if on_step is not None:
+                ends = self.trial_ends
+                on_step(self.step, env, self.trace, (ends[-1] + 1) if ends else 0,
+                        self.starts[-1], agent)
+        return self
+
+
 def execute(spec, on_step=None, fused=True):
     """Runs one spec to its budget and returns its trials, trace and metrics.
 
     on_step(step, env, trace, trial_begin, trial_start, agent), if given, is called after
     every step (videos use it; agent.decision says who chose the step's action).
-    fused: where experiments.running.fused supports the run (EBRL, a paper fallback, no
-    on_step), run stretches of steps in one compiled call each; the same bits as the
-    step-by-step loop (tests/test_fused.py), which fused=False forces.
+    fused: where experiments.running.fused supports the run, run stretches of steps in
+    one compiled call each (Trials); fused=False forces the step-by-step loop.
     """
     import tasks
-    from experiments.running import fused as fused_loop
 
     env_seed, _ = seeds_for(spec.seed)
     env = tasks.load(spec.entry, seed=env_seed, config=spec.task_config())
     agent = make_agent(spec, env)
     keys = tuple(key for key, _ in spec.entry.modalities)
-    # trace[k]: the position after step k (k = 0: the first start); starts[i]: the
-    # start of trial i. Trial i's path is starts[i] then trace[end(i-1)+1 : end(i)+1].
-    trace = np.empty((spec.steps + 1, 2), dtype=np.float32)
-    starts, trial_ends = [], []
     started = time.perf_counter()
-    ts = env.reset()
-    pose = env.physics.robot_pose
-    starts.append(pose()[:2])
-    trace[0] = starts[0]
-    if fused and fused_loop.Loop.supports(env, agent, on_step):
-        loop, step, observation = fused_loop.Loop(env, agent, trace), 0, ts.observation
-        while step < spec.steps:
-            done, goal = loop.stretch(step + 1, spec.steps - step, observation)
-            step, observation = step + done, None
-            if goal:
-                trial_ends.append(step)
-                observation = env.reset().observation
-                starts.append(pose()[:2])
-    else:
-        for step in range(1, spec.steps + 1):
-            obs, readings = agent_input(ts.observation, keys)
-            ts = env.step(agent.act(obs, readings=readings))
-            agent.learn(ts.reward, ts.last())
-            trace[step] = pose()[:2]
-            if ts.last():
-                trial_ends.append(step)
-                ts = env.reset()
-                starts.append(pose()[:2])
-            if on_step is not None:
-                on_step(step, env, trace, (trial_ends[-1] + 1) if trial_ends else 0,
-                        starts[-1], agent)
+    trials = Trials(env, agent, keys, spec.steps, fused=fused, on_step=on_step)
+    trials.run(spec.steps)
     seconds = time.perf_counter() - started
     env.close()
     return {
-        "trial_ends": np.asarray(trial_ends, dtype=np.int64),
-        "trace": compact(trace),
-        "starts": compact(starts),
+        "trial_ends": np.asarray(trials.trial_ends, dtype=np.int64),
+        "trace": compact(trials.trace),
+        "starts": compact(trials.starts),
         "seconds": seconds,
         "memory_decisions": int(agent.memory_decisions),
     }

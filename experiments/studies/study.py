@@ -86,6 +86,8 @@ def _rescue(study):
     import optuna
     running = study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.RUNNING,))
     for t in running:
+        # Optuna has no public way to mark a trial it did not start in this process:
+        # its storage and trial id (private in Optuna's API) are the only handle.
         study._storage.set_trial_user_attr(t._trial_id, "error", INTERRUPTED)
         study.tell(t.number, state=optuna.trial.TrialState.FAIL)
         study.enqueue_trial(t.params, skip_if_exists=False)
