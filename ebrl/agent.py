@@ -5,7 +5,7 @@ Worked example::
     import numpy as np, ebrl
     agent = ebrl.Agent(ebrl.paper_config("T"), obs_dim=7, action_dim=1,
                        fallback=ebrl.intrinsic.fallback_for("eq8", "avoidance"), seed=0)
-    obs = np.zeros(7)                      # readings scaled to [0, 1]
+    obs = np.zeros(7)                      # ranges scaled to [0, 1]
     for t in range(100):
         action = agent.act(obs)            # memory (eq 5) or the fallback behaviour
         obs, reward, last = np.random.rand(7), float(t == 99), t == 99   # your environment
@@ -44,7 +44,7 @@ __all__ = ["Agent", "DECIDERS", "act_step", "trial_end", "eq1", "eq5"]
 
 
 @njit(cache=True)
-def act_step(s, f, x, readings):
+def act_step(s, f, x, ranges):
     """One act of an agent with a compiled fallback: kernels.act_memory on the agent's
     record s, then, where the memory does not choose, the fallback's step (record f,
     ebrl.intrinsic.fallback_step) on the agent's stream. Returns who chose (an index of
@@ -54,7 +54,7 @@ def act_step(s, f, x, readings):
     if element == INVALID:
         return INVALID
     if element == FALLBACK:
-        chose = intrinsic.fallback_step(f, readings, s.rng, s.action)
+        chose = intrinsic.fallback_step(f, ranges, s.rng, s.action)
         if s.decider != EXPLORATION:
             s.decider = chose
     return s.decider
@@ -192,12 +192,12 @@ class Agent:
         return out
 
     # -- acting --------------------------------------------------------------------
-    def act(self, obs, readings=None):
-        """The action for observation obs (1-D). The fallback gets readings, or obs."""
+    def act(self, obs, ranges=None):
+        """The action for observation obs (1-D). The fallback gets ranges, or obs."""
         x = np.array(obs, dtype=np.float64)
         if x.shape != (self.obs_dim,):
             raise ValueError(f"observation must have shape ({self.obs_dim},), got {x.shape}")
-        given = x if readings is None else np.ascontiguousarray(readings, dtype=np.float64)
+        given = x if ranges is None else np.ascontiguousarray(ranges, dtype=np.float64)
         if self.compiled:  # eq 2-4, eq 1, eq 5, the exploration draw, the fallback
             code = act_step(self.record, self.fallback_record, x, given)
         else:  # the same, with a Python fallback

@@ -2,7 +2,7 @@
 other than EBRL use the intrinsic behaviour, given a way to measure its confidence?
 
 Both take ``(config, obs_dim, action_dim, fallback, *, groups=None, group_weights=None,
-seed=None)`` like ebrl.Agent, and offer ``act(obs, readings=None)``, ``learn(reward,
+seed=None)`` like ebrl.Agent, and offer ``act(obs, ranges=None)``, ``learn(reward,
 last=False)``, ``steps``, ``used_memory`` (True when the learner, not the fallback,
 chose), ``memory_decisions`` and ``fallback_decisions``. Each act draws one exploration
 number from the agent's generator (``np.random.default_rng(seed)``), then either the
@@ -217,7 +217,7 @@ class _Base:
             raise ValueError("reward must be finite")
         return reward
 
-    def _decide(self, x, readings, learner_action):
+    def _decide(self, x, ranges, learner_action):
         """Exploration draw first; then learner_action() -> discrete index or None (the
         learner declines), else the fallback, whose action is mapped for learning."""
         explore = self.rng.random() < self._exploration
@@ -227,7 +227,7 @@ class _Base:
             self.used_memory = True
             self.memory_decisions += 1
         else:
-            action = np.array(self.fallback(x if readings is None else readings, self.rng),
+            action = np.array(self.fallback(x if ranges is None else ranges, self.rng),
                               dtype=np.float64).reshape(self.action_dim)
             index = nearest_action(self.actions, action)
             self.used_memory = False
@@ -304,7 +304,7 @@ class QTable(_Base):
             row = self.table[state] = self._default.copy()
         row[action] += self._alpha * (target - row[action])
 
-    def act(self, obs, readings=None):
+    def act(self, obs, ranges=None):
         x = self._input(obs)
         s = self.state(x)
         if self._pending is not None:
@@ -321,7 +321,7 @@ class QTable(_Base):
             return min(int(np.searchsorted(np.cumsum(p), self.rng.random(), side="right")),
                        self.n_actions - 1)
 
-        action = self._decide(x, readings, roulette)
+        action = self._decide(x, ranges, roulette)
         self._state = s
         return action
 
@@ -512,7 +512,7 @@ class MFEC(_Base):
         """The embedding of an observation (+ 0.0 makes -0.0 equal to 0.0 bitwise)."""
         return np.asarray(obs, dtype=np.float64) * self._scale + 0.0
 
-    def act(self, obs, readings=None):
+    def act(self, obs, ranges=None):
         x = self._input(obs)
         e = self._emb = self.embed(x)
         self._clock += 1
@@ -530,7 +530,7 @@ class MFEC(_Base):
                 return None
             return best
 
-        return self._decide(x, readings, greedy)
+        return self._decide(x, ranges, greedy)
 
     def learn(self, reward, last=False):
         reward = self._reward(reward)

@@ -90,9 +90,9 @@ class Turning:
     def __post_init__(self):
         object.__setattr__(self, "_w", np.asarray(self.weights, dtype=np.float64))
 
-    def avoid(self, readings):
-        """The turn for readings (scaled to [0, 1], leftmost first)."""
-        return _clip1(self.gain * (float(np.dot(self._w, readings)) + self.bias))
+    def avoid(self, ranges):
+        """The turn for ranges (scaled to [0, 1], leftmost first)."""
+        return _clip1(self.gain * (float(np.dot(self._w, ranges)) + self.bias))
 
     def shape_fields(self):
         return ("weights", "bias", "gain")
@@ -133,10 +133,10 @@ class Accelerating:
         object.__setattr__(self, "_w", np.array([self.weights_h, wv], dtype=np.float64))
         object.__setattr__(self, "_k", self.gain / (1.0 - self.threshold))
 
-    def avoid(self, readings, previous=None):
-        """(a_h, a_v) for readings (scaled to [0, 1], E first, counter-clockwise);
+    def avoid(self, ranges, previous=None):
+        """(a_h, a_v) for ranges (scaled to [0, 1], E first, counter-clockwise);
         previous: the fallback's last acceleration (None: zero)."""
-        b = self._w.dot(np.asarray(readings, dtype=np.float64)).tolist()
+        b = self._w.dot(np.asarray(ranges, dtype=np.float64)).tolist()
         t, k, hold, bias = self.threshold, self._k, self.hold, self.bias
         out = [0.0, 0.0]
         for i in (0, 1):

@@ -49,7 +49,7 @@ def bench_agent(memory_size=4096, obs_dim=10, action_dim=2, groups=None, group_w
     rng = np.random.default_rng(seed)
     groups = None if groups is None else [np.asarray(g) for g in groups]
     agent = Agent(Config(memory_size=memory_size), obs_dim, action_dim,
-                  lambda readings, r: r.normal(0.0, 0.5, action_dim).clip(-1, 1),
+                  lambda ranges, r: r.normal(0.0, 0.5, action_dim).clip(-1, 1),
                   groups=groups, group_weights=group_weights, seed=seed)
     obs = rng.random((window, obs_dim))
     marks, references = {}, []

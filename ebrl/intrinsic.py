@@ -1,7 +1,7 @@
 """The intrinsic behaviours of Section 3.4 and the random walk they are compared with.
 
-Inputs are the encoded 0..255 readings scaled to [0, 1]. A fallback behaviour is a
-callable fallback(readings, rng) -> action array; one with a reset() method is reset
+Inputs are the range codes (0..255) scaled to [0, 1], the "ranges". A fallback behaviour is a
+callable fallback(ranges, rng) -> action array; one with a reset() method is reset
 by the agent when a trial ends.
 
 Two readings are switches (ebrl.config.READINGS), passed to fallback_for:
@@ -32,7 +32,7 @@ _NOTHING = np.zeros(0)
 def eq8(s):
     """eq 8: a = sum_{i=1}^{n//2} i (s_i - s_{n+1-i}) / sum_{i=1}^{n//2} i.
 
-    s: the readings, leftmost first; a > 0 turns right, away from something on the left.
+    s: the ranges, leftmost first; a > 0 turns right, away from something on the left.
     The sum is numpy's dot of the ranks and the differences as it runs on this project's
     machines (BLAS on an FMA CPU): the first product, then each next one fused with the
     sum, one rounding each, so a run keeps the bits it had when this was np.dot."""
@@ -58,7 +58,7 @@ def eq9(b, theta, unchanged):
 
 @njit(cache=True)
 def eq10(s):
-    """eq 10 for the readings E, NE, N, NW, W, SW, S, SE (counter-clockwise):
+    """eq 10 for the ranges E, NE, N, NW, W, SW, S, SE (counter-clockwise):
     b_h = 0.5 (s_W - s_E) + 0.25 (s_NW + s_SW - s_NE - s_SE), and symmetrically
     b_v = 0.5 (s_S - s_N) + 0.25 (s_SW + s_SE - s_NW - s_NE): away from obstacles."""
     e, ne, n, nw, w, sw, so, se = s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7]
@@ -67,23 +67,23 @@ def eq10(s):
     return b_h, b_v
 
 
-def _readings(readings):
-    return np.ascontiguousarray(readings, dtype=np.float64)
+def _ranges(ranges):
+    return np.ascontiguousarray(ranges, dtype=np.float64)
 
 
-def avoid_by_turning(readings):
-    """eq 8 (`eq8`) for the readings, leftmost first: the turn, a > 0 to the right."""
-    return float(eq8(_readings(readings)))
+def avoid_by_turning(ranges):
+    """eq 8 (`eq8`) for the ranges, leftmost first: the turn, a > 0 to the right."""
+    return float(eq8(_ranges(ranges)))
 
 
-def avoid_by_accelerating(readings, theta=THETA, previous=None):
-    """eq 9-10 for both axes. readings: E, NE, N, NW, W, SW, S, SE (counter-clockwise).
+def avoid_by_accelerating(ranges, theta=THETA, previous=None):
+    """eq 9-10 for both axes. ranges: E, NE, N, NW, W, SW, S, SE (counter-clockwise).
 
     eq 10 (`eq10`) gives each axis's b, away from obstacles; eq 9 (`eq9`) its dead-zoned
     acceleration: 0 on an axis inside the dead zone, or previous[axis] when previous
     (the last acceleration, eq9_dead_zone "keep") is given.
     """
-    b_h, b_v = eq10(_readings(readings))
+    b_h, b_v = eq10(_ranges(ranges))
     if previous is None:
         return np.array([eq9(b_h, theta, 0.0), eq9(b_v, theta, 0.0)])
     return np.array([eq9(b_h, theta, float(previous[0])), eq9(b_v, theta, float(previous[1]))])
@@ -116,32 +116,32 @@ TURNING, ACCELERATING, GIVEN, WALK = range(4)
 
 
 @njit(cache=True)
-def avoid_into(kind, readings, theta, last, out):
+def avoid_into(kind, ranges, theta, last, out):
     """out = eq 8's turn (TURNING) or eq 9-10's accelerations (ACCELERATING), holding
     `last` inside eq 9's dead zone when it is not empty; GIVEN leaves out as it is."""
     if kind == TURNING:
-        out[0] = eq8(readings)
+        out[0] = eq8(ranges)
         return
     if kind == GIVEN:
         return
-    b_h, b_v = eq10(readings)
+    b_h, b_v = eq10(ranges)
     hold = last.shape[0] > 0
     out[0] = eq9(b_h, theta, last[0] if hold else 0.0)
     out[1] = eq9(b_v, theta, last[1] if hold else 0.0)
 
 
 @njit(cache=True)
-def fallback_act(kind, readings, random, add, theta, last, out):
+def fallback_act(kind, ranges, random, add, theta, last, out):
     """Intrinsic's action once its draws are made: `random` the random action's
     Gaussians (clipped here, in place; empty: the uniform draw was not below the
     rate), so out = the avoidance
     (avoid_into), or the random action clipped, or with add the two summed and clipped;
     `last`, when not empty, becomes the action. Returns True for the random action."""
     if random.shape[0] == 0:
-        avoid_into(kind, readings, theta, last, out)
+        avoid_into(kind, ranges, theta, last, out)
     elif add:
         clip_unit(random)  # random_action's clip, then the sum's
-        avoid_into(kind, readings, theta, last, out)
+        avoid_into(kind, ranges, theta, last, out)
         out += random
         clip_unit(out)
     else:
@@ -178,7 +178,7 @@ def choice_of(f):
 
 
 @njit(cache=True)
-def fallback_step(f, readings, rng, out):
+def fallback_step(f, ranges, rng, out):
     """The fallback's action into out, its draws from rng in their order: the random
     walk's Gaussians (WALK); or Intrinsic's uniform draw, then the random action's
     Gaussians when it is below the rate, then fallback_act (a GIVEN avoidance is in out
@@ -195,7 +195,7 @@ def fallback_step(f, readings, rng, out):
         random = f.random[:dim]
         for i in range(dim):
             random[i] = rng.normal(0.0, f.sd)
-    chose = fallback_act(f.kind, readings, random, f.add, f.theta, f.last, out)
+    chose = fallback_act(f.kind, ranges, random, f.add, f.theta, f.last, out)
     f.choice = RANDOM if chose else INTRINSIC
     return f.choice
 
@@ -208,9 +208,9 @@ def fallback_reset(f):
 
 
 @njit(cache=True)
-def fallback_call(f, readings, out):
+def fallback_call(f, ranges, out):
     """fallback_step drawing from the record's own stream (a fallback called from Python)."""
-    return fallback_step(f, readings, f.rng, out)
+    return fallback_step(f, ranges, f.rng, out)
 
 
 class _Fallback:
@@ -239,15 +239,15 @@ class _Fallback:
         code = choice_of(self.record)
         return self._choices[code] if code >= 0 else None
 
-    def _given(self, readings, out):
-        """For a GIVEN avoidance: out = the avoidance of readings (none here)."""
+    def _given(self, ranges, out):
+        """For a GIVEN avoidance: out = the avoidance of ranges (none here)."""
 
-    def __call__(self, readings, rng):
+    def __call__(self, ranges, rng):
         self.bind(rng)
-        readings = _readings(readings)
+        ranges = _ranges(ranges)
         out = np.empty(self.action_dim)
-        self._given(readings, out)
-        fallback_call(self.record, readings, out)
+        self._given(ranges, out)
+        fallback_call(self.record, ranges, out)
         return out
 
 
@@ -275,7 +275,7 @@ class Intrinsic(_Fallback):
     random_rate: the same draws in the same order, so the two differ in the action
     only. (Adding a random action every step would leave the paper's 20% unused.)
 
-    hold=True (eq9_dead_zone "keep", for eq 9-10): avoid(readings, previous=last) gets
+    hold=True (eq9_dead_zone "keep", for eq 9-10): avoid(ranges, previous=last) gets
     the last action this fallback returned (avoidance, random or their clipped sum),
     which eq 9 keeps on an axis inside its dead zone; 0 at first and after reset(),
     which the agent calls when a trial ends (the robot restarts at rest). Actions the
@@ -302,13 +302,13 @@ class Intrinsic(_Fallback):
         """True when the avoidance itself is compiled (the paper's eq 8 or eq 9-10)."""
         return self._kind != GIVEN
 
-    def _given(self, readings, out):
+    def _given(self, ranges, out):
         if self._kind != GIVEN:
             return
         if self.last is None:
-            out[:] = np.array(self.avoid(readings), dtype=np.float64, ndmin=1)
+            out[:] = np.array(self.avoid(ranges), dtype=np.float64, ndmin=1)
         else:
-            out[:] = np.array(self.avoid(readings, previous=self.last), dtype=np.float64,
+            out[:] = np.array(self.avoid(ranges, previous=self.last), dtype=np.float64,
                               ndmin=1)
 
     def reset(self):

@@ -16,7 +16,7 @@ VELOCITY_CODES = ("none", "code")
 
 @dataclasses.dataclass(frozen=True)
 class TaskConfig:
-    # Section 3.2: readings of range 14 units, with Gaussian noise of sd 5% of 255.
+    # Section 3.2: rangefinders of range 14 units, with Gaussian noise of sd 5% of 255.
     sensor_range: float = 14.0
     sensor_noise: float = 0.05 * 255
     # Section 3.3: each action part scaled by a factor drawn from [1 - 0.05, 1].

@@ -21,7 +21,7 @@ metadata. Reaching the goal is `terminated`; the step limit (Gymnasium's TimeLim
 `truncated`, never `terminated`.
 
 Spaces are float32, as Gymnasium's own MuJoCo environments: the action in [-1, 1] (the
-task takes it as float64), the range readings in [0, 255] (Section 3.2's codes). The
+task takes it as float64), the range codes in [0, 255] (Section 3.2's codes). The
 floating drive's velocity (units/step) has no bound: its thrust changes it by up to 0.2
 units/step every step and nothing caps it (the floor is frictionless, there is no drag,
 and with bump="bounce" a wall takes no speed away), so no finite bound holds for every

@@ -159,7 +159,7 @@ def pose(xpos, xmat, qpos, qyaw, unit):
 
 @njit(cache=True)
 def surface_distances(raw, metres_to_units, radius):
-    """Rangefinder readings (m from the centre; -1 = no hit) -> units from the surface."""
+    """Rangefinder values (m from the centre; -1 = no hit) -> units from the surface."""
     out = np.empty(raw.shape[0])
     for i in range(raw.shape[0]):
         out[i] = np.inf if raw[i] < 0.0 else raw[i] * metres_to_units - radius
@@ -346,8 +346,8 @@ def goal_reached(s):
 
 
 @njit(cache=True)
-def readings(s, noise):
-    """navigation.Navigation.sense: the encoded readings plus noise (empty: none)."""
+def sense(s, noise):
+    """navigation.Navigation.sense: the range codes plus noise (empty: none)."""
     return encode(ranges(s.m, s.d, s.flags, s.sensordata, s.beam0, s.beam1,
                          s.metres_to_units, s.radius), noise, s.levels, s.per_unit)
 
@@ -456,8 +456,8 @@ def two_wheel_finish(s):
 @njit(cache=True)
 def two_wheel_step(s, action, u, noise):
     """One agent step of the two-wheel drive, the hooks' work in their order: the turn,
-    the move, a blocked move's leftover turn, the halt, the goal test and the encoded
-    readings. Returns (status, substeps run, in the goal, readings)."""
+    the move, a blocked move's leftover turn, the halt, the goal test and the
+    range codes. Returns (status, substeps run, in the goal, codes)."""
     nothing = np.empty(0)
     if not clip_unit(action):
         return NOT_FINITE, 0, False, nothing
@@ -473,7 +473,7 @@ def two_wheel_step(s, action, u, noise):
     n += more
     if status != OK:
         return status, n, False, nothing
-    return OK, n, goal, readings(s, noise)
+    return OK, n, goal, sense(s, noise)
 
 
 # -- the floating drive (tasks.floating.Physics) -------------------------------------
@@ -584,9 +584,8 @@ def velocity_reading(s, v, noise):
 @njit(cache=True)
 def floating_step(s, action, u, noise, velocity_noise):
     """One agent step of the floating drive, the hooks' work in their order: the thrust,
-    the coast (with the bump reading's velocity change), the goal test, the encoded
-    readings and the velocity reading. Returns (status, substeps run, in the goal,
-    readings, velocity)."""
+    the coast (with the bump reading's velocity change), the goal test, the range codes
+    and the velocity. Returns (status, substeps run, in the goal, codes, velocity)."""
     nothing = np.empty(0)
     if not clip_unit(action):
         return NOT_FINITE, 0, False, nothing, nothing
@@ -599,7 +598,7 @@ def floating_step(s, action, u, noise, velocity_noise):
     if status != OK:
         return status, n, False, nothing, nothing
     goal = goal_reached(s)
-    codes = readings(s, noise)
+    codes = sense(s, noise)
     v = velocity(s.m, s.d, s.base, s.velocity, s.velocity6)
     return OK, n, goal, codes, velocity_reading(s, v, velocity_noise)
 
@@ -607,7 +606,7 @@ def floating_step(s, action, u, noise, velocity_noise):
 @njit(cache=True)
 def step(s, action, u, noise, velocity_noise, codes, vel):
     """One agent step of the record's drive (two_wheel_step or floating_step) on a
-    finite action (clipped in place): the readings into codes and, floating, the
+    finite action (clipped in place): the range codes into codes and, floating, the
     velocity into vel. Returns (status, substeps run, in the goal)."""
     if s.kind == FLOATING:
         status, n, goal, c, v = floating_step(s, action, u, noise, velocity_noise)

@@ -41,7 +41,7 @@ class ContractError(ValueError):
 
 
 # The per-step sensor arithmetic runs as small compiled loops (tasks.kernels): on 7-8
-# readings, numpy's per-call overhead cost more than the sensing itself. Same
+# sensor values, numpy's per-call overhead cost more than the sensing itself. Same
 # operations in the same order, so the same bits (tested).
 
 _NO_NOISE = np.zeros(0)
@@ -85,7 +85,7 @@ class Physics(dm_mujoco.Physics):
 
     Sensors are computed once per agent step, not on every substep: MuJoCo's sensor
     stage is disabled and `ranges()` runs it at the state it reads (mj_sensorPos),
-    which gives the same readings bit for bit."""
+    which gives the same sensor values bit for bit."""
 
     def _reload_from_data(self, data):
         super()._reload_from_data(data)
@@ -440,7 +440,7 @@ class Navigation(base.Task):
         return obs
 
     def sense(self, physics):
-        """Encoded readings (Section 3.2) plus Gaussian noise, clipped to [0, 255]."""
+        """Range codes (Section 3.2) plus Gaussian noise, clipped to [0, 255]."""
         distance = physics.ranges()
         if self.sensor_noise > 0:
             return encode_range(distance, self.random.normal(0.0, self.sensor_noise,

@@ -364,7 +364,7 @@ def test_same_seed_same_actions_floating_like(name):
         out = []
         for t in range(600):
             obs = places[rng.integers(4)] + rng.normal(0, 0.01, 10)
-            out.append(ag.act(obs, readings=obs[:8]))
+            out.append(ag.act(obs, ranges=obs[:8]))
             ag.learn(float(t % 50 == 49), t % 50 == 49)
         return np.concatenate(out), ag.memory_decisions
     (a, ma), (b, mb), (c, _) = run(1), run(1), run(2)

@@ -98,7 +98,7 @@ def _run(seed, steps=3000):
     actions = []
     for step in range(steps):
         obs = rng.random(10)
-        actions.append(ag.act(obs, readings=obs[:8]))
+        actions.append(ag.act(obs, ranges=obs[:8]))
         last = step % 150 == 149
         ag.learn(1.0 if last else -0.1 if step % 40 == 0 else 0.0, last)
     return np.array(actions), ag

@@ -60,7 +60,7 @@ def stream(name, steps=3000, explicit=False, **switches):
     actions = np.empty((steps, fb.action_dim))
     for t in range(steps):
         obs = rng.random(obs_dim)
-        actions[t] = ag.act(obs, readings=obs[:8] if obs_dim == 10 else obs)
+        actions[t] = ag.act(obs, ranges=obs[:8] if obs_dim == 10 else obs)
         last = rng.random() < 1 / 60
         reward = 1.0 if last else (-0.1 if rng.random() < 0.02 else 0.0)
         ag.learn(reward, last)

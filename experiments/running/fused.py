@@ -84,8 +84,8 @@ def run(steps, agent, fallback, drive, stream, io, trace, first):
                                        io.velocity_noise):
             return k, REFILL
         observe(io)
-        readings = io.obs[io.range_at:io.range_at + n_codes]
-        if act_step(agent, fallback, io.obs, readings) == agent_kernels.INVALID:
+        ranges = io.obs[io.range_at:io.range_at + n_codes]
+        if act_step(agent, fallback, io.obs, ranges) == agent_kernels.INVALID:
             return k, INVALID
         io.env_action[:] = agent.action
         status, n, goal = task_kernels.step(drive, io.env_action, io.u, io.z, io.vz,

@@ -171,24 +171,24 @@ def _reading_scale():
 
 
 def agent_input(observation, keys=("range",)):
-    """(agent observation, readings for the fallback): the modalities `keys` in order,
-    the range readings scaled to [0, 1] (Section 3.4), the others (the velocity, in
+    """(agent observation, ranges for the fallback): the modalities `keys` in order,
+    the range ranges scaled to [0, 1] (Section 3.4), the others (the velocity, in
     units/step) as they are."""
     codes = observation["range"]
     if len(keys) == 1:
-        readings = codes * _reading_scale()
-        return readings, readings
+        ranges = codes * _reading_scale()
+        return ranges, ranges
     parts = [observation[k] for k in keys]
     obs = np.empty(sum(len(p) for p in parts))
-    at, readings = 0, None
+    at, ranges = 0, None
     for key, part in zip(keys, parts):
         view = obs[at: at + len(part)]
         if key == "range":
-            readings = np.multiply(part, _reading_scale(), out=view)
+            ranges = np.multiply(part, _reading_scale(), out=view)
         else:
             view[:] = part
         at += len(part)
-    return obs, readings
+    return obs, ranges
 
 
 class Trials:
@@ -249,8 +249,8 @@ class Trials:
         env, agent, on_step = self.env, self.agent, self.on_step
         while self.step < end:
             self.step += 1
-            obs, readings = agent_input(self._ts.observation, self.keys)
-            self._ts = env.step(agent.act(obs, readings=readings))
+            obs, ranges = agent_input(self._ts.observation, self.keys)
+            self._ts = env.step(agent.act(obs, ranges=ranges))
             agent.learn(self._ts.reward, self._ts.last())
             self.trace[self.step] = self._pose()[:2]
             if self._ts.last():
