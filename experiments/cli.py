@@ -15,6 +15,7 @@ import threading
 
 from experiments import paper
 from experiments.checks import validate
+from experiments.running import settings
 
 USAGE_ERROR = 2
 RUNS_FAILED = 1
@@ -110,7 +111,7 @@ def _override(text):
     """name=value for a field of the agent's config (ebrl.Config) or the task's
     (tasks.TaskConfig), e.g. policy_threshold=0.05 or bump=slide."""
     name, sep, value = text.partition("=")
-    kinds = validate.setting_kinds()
+    kinds = settings.kinds()
     if not sep or name not in kinds:
         raise argparse.ArgumentTypeError(f"bad --set {text!r}; use NAME=VALUE with NAME one of "
                                          + ", ".join(kinds))
@@ -125,7 +126,7 @@ def _comparison(text):
     if text == "behaviour":
         return "behaviour", ("hand-coded", "evolved")
     name, sep, values = text.partition("=")
-    kinds = validate.setting_kinds()
+    kinds = settings.kinds()
     parts = values.split(",")
     if not sep or name not in kinds or len(parts) != 2:
         raise argparse.ArgumentTypeError(
@@ -571,7 +572,7 @@ def cmd_check(args):
 def _sweep_values(args):
     """--param and --values as (name, value) pairs, each value distinct and accepted by
     ebrl.Config for the selected robots."""
-    fields = list(validate.setting_kinds())
+    fields = list(settings.kinds())
     if args.param not in fields:
         raise ValueError(f"unknown --param {args.param!r}; one of {', '.join(fields)}")
     try:
@@ -621,7 +622,7 @@ def cmd_sweep(args):
                 rows.append((v, results.load_runs(folder)))
         if baseline is not None:
             from tasks.robots import resolve
-            default = validate.setting_default(
+            default = settings.default(
                 args.param, [resolve(r, args.drive) for r in _selected_robots(args)])
             if default is None:  # the robots' defaults differ: the baseline first
                 rows = [("the robots' own", baseline)] + rows

@@ -73,40 +73,6 @@ def fraction(text, option):
     return value
 
 
-def _setting_classes():
-    """The config classes whose fields --set may name: every learner's, then the task's."""
-    from experiments.running import protocol
-    from tasks.config import TaskConfig
-    return [protocol.agent_classes(a)[0] for a in protocol.AGENTS] + [TaskConfig]
-
-
-def setting_kinds():
-    """Every --set name, the learners' (ebrl.Config, the baselines') then the task's
-    (tasks.TaskConfig), with the type its value takes (a field whose default is None
-    takes a number)."""
-    import dataclasses
-    kinds = {}
-    for cls in _setting_classes():
-        default = cls()
-        for f in dataclasses.fields(cls):
-            value = getattr(default, f.name)
-            kinds[f.name] = float if value is None else type(value)
-    return kinds
-
-
-def setting_default(name, entries=()):
-    """The default value of a --set name (EBRL's, a baseline's, or the task's); with
-    robots' registry entries, theirs (their readings, tasks.robots.Drive.readings): one
-    value if they agree, else None."""
-    if entries:
-        values = {dict(e.readings).get(name, setting_default(name)) for e in entries}
-        return values.pop() if len(values) == 1 else None
-    for cls in _setting_classes():
-        if hasattr(cls(), name):
-            return getattr(cls(), name)
-    raise ValueError(f"unknown setting {name!r}")
-
-
 def number(kind, name, text):
     """text as kind (int, float, bool or str) for the setting name; floats must be
     finite, booleans are true or false."""

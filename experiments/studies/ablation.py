@@ -67,9 +67,9 @@ def _is_default(changes, robot):
     """Whether every change is already the robot's default (its readings, else the
     config's field): such a cell is the default's cell for that robot."""
     from tasks.robots import resolve
-    from experiments.checks import validate
+    from experiments.running import settings
     entry = resolve(robot)
-    return all(validate.setting_default(name, [entry]) == value for name, value in changes)
+    return all(settings.default(name, [entry]) == value for name, value in changes)
 
 
 def _concerns(changes, robot, condition):
@@ -151,8 +151,8 @@ def _row(cell, g):
 def _defaults(name):
     """A reading's default, per paper robot where they differ: 'keep (floating), zero'."""
     from tasks.robots import PAPER_ROBOTS, ROBOTS
-    from experiments.checks import validate
-    values = {r: validate.setting_default(name, [ROBOTS[r]]) for r in PAPER_ROBOTS}
+    from experiments.running import settings
+    values = {r: settings.default(name, [ROBOTS[r]]) for r in PAPER_ROBOTS}
     if len(set(map(str, values.values()))) == 1:
         return next(iter(values.values()))
     return ", ".join(f"{v} ({r})" for r, v in values.items())

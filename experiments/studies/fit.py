@@ -87,9 +87,9 @@ def default(name, robot="floating"):
     else the config's field; the file's radius 1.5 and friction 1 where that is None).
     The search's subject is the floating robot: its defaults are trial 0 and the text
     of a trial's readings; a setting shared by both robots is run as given on each."""
-    from experiments.checks import validate
+    from experiments.running import settings
     from tasks.robots import resolve
-    value = validate.setting_default(name, [resolve(robot)])
+    value = settings.default(name, [resolve(robot)])
     return {"radius": 1.5, "wall_friction": 1.0}.get(name, value) if value is None else value
 
 
