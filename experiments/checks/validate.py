@@ -21,6 +21,9 @@ MAX_BENCH_BLOCKS = 1_000
 #: The agent's memory_size through --set (Table 1: 1024 and 4096); the agent allocates
 #: its whole memory up front, so a huge value would exhaust RAM in every worker.
 MAX_MEMORY_SIZE = 1_000_000
+#: `ebrl fit` and `ebrl evolve`: trials (or generations) a study holds; CMA-ES's population.
+MAX_TRIALS = 100_000
+MAX_POPULATION = 1_000
 
 
 def seeds(text):

@@ -1,0 +1,118 @@
+"""The argument types and options several commands share: --robot and --drive from the
+registry, seeds, bounded integers, choices, --set NAME=VALUE, --workers, --backend,
+--no-progress and --sampler-seed. A bad value is argparse's one-line error (exit status 2),
+the message from experiments.checks.validate.
+"""
+import argparse
+import os
+import sys
+
+from experiments.checks import validate
+from experiments.running import settings
+
+
+def robot_list(text):
+    """--robot: a registered name, several joined by commas, "paper" (the paper's two
+    robots), "all" (every registered robot), or a path to a robot .xml file (with
+    --drive). The names come from the registry, tasks/robots.py."""
+    from tasks.robots import PAPER_ROBOTS, ROBOTS
+    if text == "paper":
+        return PAPER_ROBOTS
+    if text == "all":
+        return tuple(ROBOTS)
+    if text.lower().endswith(".xml"):
+        return (text,)
+    names = tuple(n.strip() for n in text.split(","))
+    for n in names:
+        if n not in ROBOTS:
+            raise argparse.ArgumentTypeError(
+                f"unknown robot {n!r}; valid: {', '.join(ROBOTS)}, paper, all, "
+                "or a path to a robot .xml file with --drive")
+    return names
+
+
+def _one_robot(text):
+    robots = robot_list(text)
+    if len(robots) != 1:
+        raise argparse.ArgumentTypeError(f"one robot, got {text!r}")
+    return robots[0]
+
+
+def add_robots(parser, default, several=True):
+    """--robot and --drive, from the registry."""
+    from tasks.robots import DRIVES
+    if several:
+        parser.add_argument("--robot", type=robot_list, default=robot_list(default),
+                            help=f"default: {default}; see 'ebrl robots'")
+    else:
+        parser.add_argument("--robot", type=_one_robot, required=True,
+                            help="a registered name (see 'ebrl robots') or a robot .xml file")
+    parser.add_argument("--drive", type=choice(tuple(DRIVES)), default=None,
+                        help="the drive of a robot given as a file: " + ", ".join(DRIVES))
+
+
+def argument(check):
+    """validate's ValueError as argparse's error (one line, exit status 2)."""
+    def wrapped(text):
+        try:
+            return check(text)
+        except ValueError as e:
+            raise argparse.ArgumentTypeError(str(e)) from None
+    return wrapped
+
+
+def seeds(text):
+    """'0-49', '7' or '1,3,5' -> sorted list of seeds (0 to validate.MAX_SEED, at most
+    validate.MAX_SEEDS of them)."""
+    return argument(validate.seeds)(text)
+
+
+def between(lo, hi):
+    """An integer from lo to hi (inclusive), for argparse."""
+    return argument(lambda text: validate.integer(text, lo, hi))
+
+
+def up_to(maximum=sys.maxsize):
+    """A positive integer at most maximum, for argparse."""
+    return between(1, maximum)
+
+
+def choice(valid):
+    def check(text):
+        if text not in valid:
+            raise argparse.ArgumentTypeError(f"unknown {text!r}; valid: {', '.join(valid)}")
+        return text
+    return check
+
+
+def setting_value(kinds, name, text):
+    """text as the value of the setting name (of kinds, settings.kinds()), for argparse."""
+    return argument(lambda v: validate.number(kinds[name], name, v))(text)
+
+
+def override(text):
+    """name=value for a field of the agent's config (ebrl.Config) or the task's
+    (tasks.TaskConfig), e.g. policy_threshold=0.05 or bump=slide."""
+    name, sep, value = text.partition("=")
+    kinds = settings.kinds()
+    if not sep or name not in kinds:
+        raise argparse.ArgumentTypeError(f"bad --set {text!r}; use NAME=VALUE with NAME one of "
+                                         + ", ".join(kinds))
+    return name, setting_value(kinds, name, value)
+
+
+def add_workers(parser):
+    parser.add_argument("--workers", type=up_to(validate.MAX_WORKERS),
+                        default=os.cpu_count() or 1)
+
+
+def add_backend(parser):
+    parser.add_argument("--backend", type=choice(("local", "ray")), default="local")
+
+
+def add_no_progress(parser):
+    parser.add_argument("--no-progress", action="store_true")
+
+
+def add_sampler_seed(parser):
+    parser.add_argument("--sampler-seed", type=between(0, 2**31 - 1), default=0)

@@ -1,0 +1,128 @@
+"""What several commands share beyond their arguments: the exit codes and the one-line
+failure, the checks made before any work (the robots, the agent's settings, a behaviour
+file, the backend, a study's storage), the runs a command plans, and its last line.
+"""
+import pathlib
+import sys
+
+from experiments import paper
+from experiments.checks import validate
+
+USAGE_ERROR = 2
+RUNS_FAILED = 1
+INTERRUPTED = 130
+
+
+def fail(message, status=USAGE_ERROR):
+    print(f"ebrl: error: {message}", file=sys.stderr)
+    return status
+
+
+def selected_robots(args):
+    return args.robot if isinstance(args.robot, tuple) else (args.robot,)
+
+
+def check_robots(args):
+    """Registered robots are known; a robot file is loaded once here, so a missing part
+    (the naming contract, docs/adding_a_robot.md) is one line before any run."""
+    from tasks.robots import ROBOTS, resolve
+    for robot in selected_robots(args):
+        resolve(robot, args.drive)
+        if robot not in ROBOTS:
+            import tasks
+            tasks.load(robot, drive=args.drive).close()
+
+
+def check_agent(args, overrides):
+    """--set values (or a sweep's): each name once, and a config that ebrl.Config accepts
+    for every selected robot, checked here rather than in the workers."""
+    names = [name for name, _ in overrides]
+    twice = next((name for name in names if names.count(name) > 1), None)
+    if twice is not None:
+        raise ValueError(f"--set {twice} is given more than once")
+    validate.agent_configs(selected_robots(args), overrides, args.drive,
+                           getattr(args, "agent", "ebrl"))
+
+
+def check_behaviour(args, overrides=()):
+    """--behaviour FILE: the genome for the selected robots (None without it)."""
+    if args.behaviour is None:
+        return None
+    from experiments.studies import evolve
+    return evolve.check_genome(args.behaviour, selected_robots(args), args.drive, overrides)
+
+
+def check_backend(backend):
+    import importlib.util
+    if backend == "ray" and importlib.util.find_spec("ray") is None:
+        raise ValueError("--backend ray needs Ray: pip install -e '.[ray]'")
+
+
+def _storage_url(args):
+    """--storage as an Optuna URL (checked: a writable SQLite file's folder, or a URL)."""
+    from experiments.studies import study
+    url = study.storage_url(args.storage, args.out)
+    if args.storage is None:
+        pass  # OUT/study.db: --out is checked by the caller
+    elif url.startswith("sqlite:///"):
+        validate.output_file(pathlib.Path(url[len("sqlite:///"):]), "--storage")
+    else:
+        import sqlalchemy.engine
+        try:
+            sqlalchemy.engine.make_url(url)
+        except Exception as e:  # sqlalchemy's ArgumentError: not a URL
+            raise ValueError(f"bad --storage {args.storage!r}: {e}") from None
+    return url
+
+
+def study_storage(args):
+    """A study command's --out, --backend and storage, checked: the storage URL."""
+    validate.output_folder(args.out, "--out")
+    check_backend(args.backend)
+    return _storage_url(args)
+
+
+def plan(args, overrides=()):
+    """The specs that --robot, --condition, --seeds and --steps select."""
+    from experiments.running import runner
+    conditions = paper.CONDITIONS if args.condition == "all" else (args.condition,)
+    return runner.plan(selected_robots(args), conditions, args.seeds, args.steps, overrides,
+                       args.drive, getattr(args, "agent", "ebrl"))
+
+
+def report_if_any(folder, ran):
+    """Rebuilds the report unless every run of this command failed and none is on disk."""
+    from experiments.outputs import report
+    return report.build(folder) if ran.made or ran.on_disk else None
+
+
+def failed_line(failed, what="failed"):
+    """'N runs failed: a, b, c and K more (first error: ...)' for (name, error) pairs."""
+    names = [name for name, _ in failed]
+    shown = ", ".join(names[:5]) + (f" and {len(names) - 5} more" if len(names) > 5 else "")
+    if len(names) == 1:
+        return f"1 run {what}: {shown} ({failed[0][1]})"
+    return f"{len(names)} runs {what}: {shown} (first error: {failed[0][1]})"
+
+
+def run_summary(ran, path):
+    """The command's last line: on stdout when every run is done, else on stderr with the
+    failed runs named, and exit status 1."""
+    report = f"report: {path}" if path is not None else "no report (no complete run)"
+    line = f"{ran.made} runs made, {ran.on_disk} already on disk; {report}"
+    if not ran.failed:
+        print(line)
+        return 0
+    return fail(f"{failed_line([(s.name, e) for s, e in ran.failed])}; recorded in "
+                f"run.json, not averaged; {line}; rerun the same command to retry",
+                RUNS_FAILED)
+
+
+def finish(what, path, failed):
+    """The last line of a command that runs many folders: what it wrote, or (exit 1) the
+    failed (name, error) runs."""
+    if failed:
+        return fail(f"{failed_line(failed)}; recorded in run.json, not averaged; "
+                    f"{what}: {path}; rerun the same command to retry", RUNS_FAILED)
+    print(f"{what}: {path}")
+    return 0

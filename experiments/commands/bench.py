@@ -1,0 +1,20 @@
+"""`ebrl bench`: microseconds per agent step, by part (experiments.checks.bench)."""
+from experiments.checks import validate
+from experiments.commands import _arguments as arguments
+
+
+def add_parser(subparsers):
+    p = subparsers.add_parser("bench", help="microseconds per agent step, by part")
+    p.add_argument("--robot", type=arguments.robot_list, default=arguments.robot_list("all"),
+                   help="default: every registered robot")
+    p.add_argument("--steps", type=arguments.up_to(validate.MAX_BENCH_STEPS), default=2000,
+                   help="timed steps per block")
+    p.add_argument("--blocks", type=arguments.up_to(validate.MAX_BENCH_BLOCKS), default=5,
+                   help="medians over this many blocks")
+    p.set_defaults(func=run)
+
+
+def run(args):
+    from experiments.checks import bench
+    bench.main(args.steps, args.blocks, args.robot)
+    return 0

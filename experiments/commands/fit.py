@@ -1,0 +1,127 @@
+"""`ebrl fit`: an Optuna study of the paper's unwritten readings against its table
+(experiments.studies.fit); resumable, and optionally the best trial validated on held-out
+seeds."""
+import pathlib
+
+from experiments.checks import validate
+from experiments.commands import _arguments as arguments
+from experiments.commands._shared import fail, finish, study_storage
+
+
+def add_parser(subparsers):
+    p = subparsers.add_parser("fit", help="search the paper's unwritten readings against its "
+                                          "table (an Optuna study; resumable)")
+    p.add_argument("--trials", type=arguments.up_to(validate.MAX_TRIALS), default=150,
+                   help="finished trials the study should hold (default: %(default)s); the "
+                        "same command continues a study")
+    p.add_argument("--seeds", type=arguments.seeds, default=[0, 1],
+                   help="every trial's seeds (default: 0-1)")
+    p.add_argument("--promote-seeds", type=arguments.seeds, default=list(range(6)),
+                   help="a promoted trial's seeds, including --seeds (default: 0-5)")
+    p.add_argument("--promote", default=0.1,
+                   type=arguments.argument(lambda t: validate.fraction(t, "--promote")),
+                   help="the share of trials promoted (default: %(default)s)")
+    p.add_argument("--batch", type=arguments.up_to(64), default=4,
+                   help="trials asked and run together (default: %(default)s)")
+    p.add_argument("--space", default="all",
+                   help="comma-separated readings to search (default: all; see FIT.md)")
+    p.add_argument("--steps", type=arguments.up_to(validate.MAX_STEPS), default=None,
+                   help="agent steps per run (default: each robot's budget)")
+    p.add_argument("--storage", default=None,
+                   help="an Optuna storage URL (postgresql://..., mysql://...) or an SQLite "
+                        "file (default: OUT/study.db)")
+    p.add_argument("--study", default=None, help="the study's name (default: fit)")
+    arguments.add_sampler_seed(p)
+    p.add_argument("--validate", type=arguments.seeds, default=None, metavar="SEEDS",
+                   help="then run the best trial (or --trial) and the defaults on these "
+                        "seeds, which the search must not use (e.g. 100-149)")
+    p.add_argument("--trial", type=arguments.between(0, 10**9), default=None,
+                   help="the trial --validate runs (default: the best)")
+    arguments.add_workers(p)
+    arguments.add_backend(p)
+    p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("fit"))
+    p.add_argument("--results", type=pathlib.Path, default=None, metavar="RESULTS.md",
+                   help="also regenerate this page's Search block")
+    p.add_argument("--figures", type=pathlib.Path, default=pathlib.Path("docs/figures"))
+    arguments.add_no_progress(p)
+    p.set_defaults(func=run)
+
+
+def _check(args):
+    """Every argument checked before any work: (space names, storage URL)."""
+    from experiments.studies import fit
+    names = tuple(fit.BY_NAME) if args.space == "all" else \
+        tuple(n.strip() for n in args.space.split(",") if n.strip())
+    unknown = [n for n in names if n not in fit.BY_NAME]
+    if unknown or not names:
+        raise ValueError(f"unknown reading {unknown[0] if unknown else args.space!r} in --space; "
+                         f"valid: {', '.join(fit.BY_NAME)}")
+    if not set(args.seeds) <= set(args.promote_seeds):
+        raise ValueError("--promote-seeds must include every seed of --seeds")
+    if args.validate is not None and set(args.validate) & set(args.promote_seeds):
+        raise ValueError("--validate seeds must be seeds the search never uses (not in "
+                         "--seeds or --promote-seeds)")
+    if args.trial is not None and args.validate is None:
+        raise ValueError("--trial chooses the trial --validate runs; give --validate too")
+    if args.results is not None:
+        validate.output_file(args.results, "--results")
+        validate.output_folder(args.figures, "--figures")
+    return names, study_storage(args)
+
+
+class _NoTrial(Exception):
+    """--validate (or --trial) names no complete trial: one line, exit status 2."""
+
+
+def _validate(args, s, problem, names):
+    """--validate: the chosen trial and the defaults on held-out seeds; the failed runs."""
+    from experiments.studies import fit, study
+    best = study.best_trials(s, 1) if args.trial is None else \
+        [t for t in s.trials if t.number == args.trial and "rungs" in t.user_attrs]
+    if not best:
+        raise _NoTrial(f"no complete trial {'to validate' if args.trial is None else args.trial}")
+    params = {k: v for k, v in best[0].params.items() if k in names}
+    _, lost = fit.validate_best(problem, params, args.out, args.validate, args.workers,
+                                args.backend, not args.no_progress)
+    return [(spec.name, e) for spec, e in lost]
+
+
+def _search(args, s, problem, names):
+    """The study's trials (the defaults first), then --validate and the pages: (the
+    optimize outcome, the study page's path, the failed (name, error))."""
+    from experiments.studies import fit, study
+    if not s.get_trials(deepcopy=False):  # the defaults first, as trial 0
+        s.enqueue_trial({n: fit.default(n) for n in names})
+    outcome = study.optimize(problem, s, args.out, args.trials, batch=args.batch,
+                             workers=args.workers, backend=args.backend,
+                             promote=args.promote, progress=not args.no_progress)
+    failed = [(f"trial {n}", e) for n, e in outcome.failed]
+    if args.validate is not None:
+        failed += _validate(args, s, problem, names)
+    path = fit.write(s, args.out, names)
+    if args.results is not None:
+        print(f"published: {fit.publish(s, args.out, names, args.results, args.figures)}")
+    return outcome, path, failed
+
+
+def run(args):
+    try:
+        names, url = _check(args)
+    except ValueError as e:
+        return fail(str(e))
+    from experiments.running import results
+    from experiments.studies import fit, study
+    rungs = (tuple(args.seeds),) if args.seeds == args.promote_seeds else \
+        (tuple(args.seeds), tuple(args.promote_seeds))
+    problem = fit.Problem(names=names, rungs=rungs, steps=args.steps)
+    args.out.mkdir(parents=True, exist_ok=True)
+    try:
+        s = study.load(args.study or fit.STUDY_NAME, url, args.out, args.sampler_seed)
+    except Exception as e:  # a storage that cannot be opened: one line
+        return fail(f"cannot open the study storage {url}: {results.error_line(e)}")
+    try:
+        outcome, path, failed = _search(args, s, problem, names)
+    except (results.ResultsError, _NoTrial) as e:
+        return fail(str(e))
+    print(f"{outcome.made} trials made now, {outcome.total} in the study ({url})")
+    return finish("fit", path, failed)

@@ -1,0 +1,45 @@
+"""`ebrl report`: summary.json, REPORT.md and the figures of a results folder, rebuilt;
+with --results, the tables of a page such as RESULTS.md too."""
+import pathlib
+
+from experiments.checks import validate
+from experiments.commands._shared import RUNS_FAILED, fail, failed_line
+
+
+def add_parser(subparsers):
+    p = subparsers.add_parser("report", help="rebuild summary.json, REPORT.md and figures")
+    p.add_argument("dir", type=pathlib.Path)
+    p.add_argument("--results", type=pathlib.Path, default=None, metavar="RESULTS.md",
+                   help="also regenerate the tables of this page (between its markers), "
+                        "copy the figures to --figures and summary.json beside it")
+    p.add_argument("--figures", type=pathlib.Path, default=pathlib.Path("docs/figures"))
+    p.set_defaults(func=run)
+
+
+def _check(args):
+    validate.results_folder(args.dir, writable=True)
+    validate.output_folder(args.dir / "figures", "the figures folder")
+    if args.results is not None:
+        validate.output_file(args.results, "--results")
+        validate.output_folder(args.figures, "--figures")
+
+
+def run(args):
+    try:
+        _check(args)
+    except ValueError as e:
+        return fail(str(e))
+    from experiments.outputs import report
+    from experiments.running import results
+    try:
+        path = report.build(args.dir)
+        if args.results is not None:
+            print(f"published: {report.publish(args.dir, args.results, args.figures)}")
+        failed = results.failed_runs(args.dir)
+    except results.ResultsError as e:
+        return fail(str(e))
+    print(f"report: {path}")
+    if failed:
+        return fail(failed_line(sorted(failed.items()), "failed and not averaged")
+                    + "; rerun `ebrl run` to retry", RUNS_FAILED)
+    return 0
