@@ -14,7 +14,7 @@ import threading
 
 from experiments.commands import (ablate, bench, check, demo, evolve, evolve_report, fit,
                                   render, report, robots, run, sweep)
-from experiments.commands._shared import INTERRUPTED, USAGE_ERROR, fail
+from experiments.commands.common import INTERRUPTED, USAGE_ERROR, fail
 
 #: The commands in the order `ebrl --help` lists them; each module's add_parser adds its
 #: sub-parser (its arguments) and sets func, its action.

@@ -4,8 +4,8 @@ import argparse
 import pathlib
 
 from experiments.checks import validate
-from experiments.commands import _arguments as arguments
-from experiments.commands._shared import check_agent, check_robots, fail, finish, selected_robots
+from experiments.commands import arguments
+from experiments.commands.common import check_agent, check_robots, fail, finish, selected_robots
 
 
 def add_parser(subparsers):

@@ -1,6 +1,6 @@
 """`ebrl bench`: microseconds per agent step, by part (experiments.checks.bench)."""
 from experiments.checks import validate
-from experiments.commands import _arguments as arguments
+from experiments.commands import arguments
 
 
 def add_parser(subparsers):

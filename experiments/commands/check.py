@@ -1,8 +1,8 @@
 """`ebrl check`: a robot's action accuracy and a random-action fuzz
 (experiments.checks.robotcheck)."""
 from experiments.checks import validate
-from experiments.commands import _arguments as arguments
-from experiments.commands._shared import check_robots, fail
+from experiments.commands import arguments
+from experiments.commands.common import check_robots, fail
 
 
 def add_parser(subparsers):

@@ -4,8 +4,8 @@ import pathlib
 
 from experiments import paper
 from experiments.checks import validate
-from experiments.commands import _arguments as arguments
-from experiments.commands._shared import fail, report_if_any, run_summary
+from experiments.commands import arguments
+from experiments.commands.common import fail, report_if_any, run_summary
 
 SEEDS = 6
 VIDEO_STEPS = 3_000

@@ -3,8 +3,8 @@
 import pathlib
 
 from experiments.checks import validate
-from experiments.commands import _arguments as arguments
-from experiments.commands._shared import check_robots, fail, finish, study_storage
+from experiments.commands import arguments
+from experiments.commands.common import check_robots, fail, finish, study_storage
 
 
 def add_parser(subparsers):

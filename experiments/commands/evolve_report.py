@@ -3,7 +3,7 @@ ones (experiments.studies.evolved)."""
 import pathlib
 
 from experiments.checks import validate
-from experiments.commands._shared import fail
+from experiments.commands.common import fail
 
 
 def add_parser(subparsers):

@@ -4,8 +4,8 @@ seeds."""
 import pathlib
 
 from experiments.checks import validate
-from experiments.commands import _arguments as arguments
-from experiments.commands._shared import fail, finish, study_storage
+from experiments.commands import arguments
+from experiments.commands.common import fail, finish, study_storage
 
 
 def add_parser(subparsers):

@@ -4,8 +4,8 @@ import pathlib
 
 from experiments import paper
 from experiments.checks import validate
-from experiments.commands import _arguments as arguments
-from experiments.commands._shared import check_agent, check_behaviour, check_robots, fail
+from experiments.commands import arguments
+from experiments.commands.common import check_agent, check_behaviour, check_robots, fail
 from experiments.running import settings
 
 

@@ -3,7 +3,7 @@ with --results, the tables of a page such as RESULTS.md too."""
 import pathlib
 
 from experiments.checks import validate
-from experiments.commands._shared import RUNS_FAILED, fail, failed_line
+from experiments.commands.common import RUNS_FAILED, fail, failed_line
 
 
 def add_parser(subparsers):

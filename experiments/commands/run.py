@@ -3,8 +3,8 @@ import pathlib
 
 from experiments import paper
 from experiments.checks import validate
-from experiments.commands import _arguments as arguments
-from experiments.commands._shared import (check_agent, check_backend, check_behaviour,
+from experiments.commands import arguments
+from experiments.commands.common import (check_agent, check_backend, check_behaviour,
                                           check_robots, fail, plan, report_if_any,
                                           run_summary)
 

@@ -5,8 +5,8 @@ import pathlib
 
 from experiments import paper
 from experiments.checks import validate
-from experiments.commands import _arguments as arguments
-from experiments.commands._shared import (check_agent, check_robots, fail, finish, plan,
+from experiments.commands import arguments
+from experiments.commands.common import (check_agent, check_robots, fail, finish, plan,
                                           report_if_any, selected_robots)
 from experiments.running import settings
 

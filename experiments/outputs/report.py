@@ -32,14 +32,14 @@ def draw_room(ax):
     ax.set_yticks([])
 
 
-def _fmt(v, digits=0):
+def fmt(v, digits=0):
     if v is None:
         return "-"
     return f"{v:,.{digits}f}"
 
 
-def _ci(ci, digits=0):
-    return "-" if ci is None else f"[{_fmt(ci[0], digits)}, {_fmt(ci[1], digits)}]"
+def interval(ci, digits=0):
+    return "-" if ci is None else f"[{fmt(ci[0], digits)}, {fmt(ci[1], digits)}]"
 
 
 def comparison_rows(summary):
@@ -70,11 +70,11 @@ def comparison_table(summary):
              "|---|---|---|---:|---:|---|---:|:-:|"]
     for r in comparison_rows(summary):
         d = r["digits"]
-        paper_txt = _fmt(r["paper"], d) + (f" ({_fmt(r['paper_sd'])})" if r["paper_sd"] else "")
-        ours_txt = _fmt(r["ours"], d) + (f" ({_fmt(r['sd'])})" if r["sd"] is not None else "")
+        paper_txt = fmt(r["paper"], d) + (f" ({fmt(r['paper_sd'])})" if r["paper_sd"] else "")
+        ours_txt = fmt(r["ours"], d) + (f" ({fmt(r['sd'])})" if r["sd"] is not None else "")
         inside = "-" if r["inside"] is None else ("yes" if r["inside"] else "no")
         lines.append(f"| {r['robot']} | {r['condition']} | {r['figure']} | {paper_txt} | {ours_txt} "
-                     f"| {_ci(r['ci95'], d)} | {_fmt(r['ratio'], 2)} | {inside} |")
+                     f"| {interval(r['ci95'], d)} | {fmt(r['ratio'], 2)} | {inside} |")
     return "\n".join(lines)
 
 
@@ -83,8 +83,8 @@ def goals_table(summary):
              "|---|---|---:|---:|---|---:|"]
     for g in summary["groups"]:
         f = g["first_trial_steps"]
-        lines.append(f"| {g['robot']} | {g['condition']} | {_fmt(g['steps'])} | {f['reached']}/{g['seeds']} "
-                     f"| {g['goals']['min']} / {_fmt(g['goals']['median'], 1)} / {g['goals']['max']} "
+        lines.append(f"| {g['robot']} | {g['condition']} | {fmt(g['steps'])} | {f['reached']}/{g['seeds']} "
+                     f"| {g['goals']['min']} / {fmt(g['goals']['median'], 1)} / {g['goals']['max']} "
                      f"| {g['goals']['below_30']}/{g['seeds']} |")
     return "\n".join(lines)
 
@@ -138,11 +138,11 @@ def save(fig, path, dpi=90):
     """Lays out, writes and closes a figure; returns path."""
     fig.tight_layout()
     fig.savefig(path, dpi=dpi)
-    _plt().close(fig)
+    pyplot().close(fig)
     return path
 
 
-def _plt():
+def pyplot():
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -151,7 +151,7 @@ def _plt():
 
 def cumulative_reward_figure(root, runs, robot, path):
     """Figures 3 and 5: cumulative reward against steps, every seed and the mean."""
-    plt = _plt()
+    plt = pyplot()
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.6), sharey=True)
     colours = {"random": "tab:orange", "avoidance": "tab:blue"}
     for k, condition in enumerate(paper.CONDITIONS):
@@ -191,7 +191,7 @@ def typical_seed(runs, robot, condition):
 def traces_figure(root, runs, robot, path):
     """Figures 2 and 4: typical successful traces: the median seed's first trial and a
     typical learned one."""
-    plt = _plt()
+    plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(11, 3.9))
     for ax, condition in zip(axes, paper.CONDITIONS):
         draw_room(ax)
@@ -217,7 +217,7 @@ def traces_figure(root, runs, robot, path):
 
 def first_vs_learned_figure(summary, path):
     """First-trial steps against learned steps per trial, ours (95% CI) and the paper's."""
-    plt = _plt()
+    plt = pyplot()
     groups = summary["groups"]
     fig, ax = plt.subplots(figsize=(8, 3.8))
     x = np.arange(len(groups))
@@ -347,8 +347,8 @@ def sweep_table(out, param, rows, failed=()):
         for g in s["groups"]:
             p = g["steps_per_trial"]
             lines.append(f"| {value} | {g['robot']} | {g['condition']} | {g['seeds']} "
-                         f"| {_fmt(g['first_trial_steps']['mean'])} | {_fmt(p['mean'])} {_ci(p['ci95'])} "
-                         f"| {_fmt(g['shrink'], 2)} | {g['goals']['min']} / {_fmt(g['goals']['median'], 1)} |")
+                         f"| {fmt(g['first_trial_steps']['mean'])} | {fmt(p['mean'])} {interval(p['ci95'])} "
+                         f"| {fmt(g['shrink'], 2)} | {g['goals']['min']} / {fmt(g['goals']['median'], 1)} |")
     if failed:
         lines += [""] + failed_section({"failed": [{"run": r, "error": e} for r, e in failed]})[:-1]
     path = pathlib.Path(out) / "SWEEP.md"

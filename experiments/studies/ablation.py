@@ -143,9 +143,9 @@ def summarize(cell_runs):
 def _row(cell, g):
     f, p = g["first_trial_steps"], g["steps_per_trial"]
     return (f"| {cell} | {g['robot']} | {g['condition']} | {g['seeds']} "
-            f"| {report._fmt(f['mean'])} {report._ci(f['ci95'])} "
-            f"| {report._fmt(p['mean'])} {report._ci(p['ci95'])} | {report._fmt(g['shrink'], 2)} "
-            f"| {g['goals']['min']} / {report._fmt(g['goals']['median'], 1)} |")
+            f"| {report.fmt(f['mean'])} {report.interval(f['ci95'])} "
+            f"| {report.fmt(p['mean'])} {report.interval(p['ci95'])} | {report.fmt(g['shrink'], 2)} "
+            f"| {g['goals']['min']} / {report.fmt(g['goals']['median'], 1)} |")
 
 
 def _defaults(name):

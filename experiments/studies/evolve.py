@@ -255,7 +255,7 @@ def fitness_rows(s):
 
 
 def fitness_figure(s, path):
-    plt = report._plt()
+    plt = report.pyplot()
     done = complete(s)
     fig, ax = plt.subplots(figsize=(7, 3.5))
     ax.scatter([generation(t) for t in done], [study.deepest(t)["goals"] for t in done],
@@ -298,7 +298,7 @@ def write(s, out, problem):
         start = genomes.to_dict(problem.start)
         lines += ["", f"Best: trial {trial.number} (generation {generation(trial)}), "
                   f"{d['goals']:.2f} goals, steps per trial "
-                  f"{report._fmt(d['steps_per_trial'])}; saved as `{name}_best.json`.", "",
+                  f"{report.fmt(d['steps_per_trial'])}; saved as `{name}_best.json`.", "",
                   "| field | start | best |", "|---|---|---|"]
         for k, v in genomes.to_dict(genome).items():
             lines.append(f"| {k} | {_show(start[k])} | {_show(v)} |")

@@ -61,7 +61,7 @@ def _groups(folder):
 def _cell(stats, digits=0):
     if stats is None or stats.get("mean") is None:
         return "-"
-    return f"{report._fmt(stats['mean'], digits)} {report._ci(stats['ci95'])}"
+    return f"{report.fmt(stats['mean'], digits)} {report.interval(stats['ci95'])}"
 
 
 def _goals(folder, robot):
@@ -174,7 +174,7 @@ def _seeds(seeds):
 def traces_figure(hand, learner, robot, path):
     """One held-out seed (the hand-coded learner's median), its first trial and a late one,
     hand-coded beside evolved."""
-    plt = report._plt()
+    plt = report.pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(11, 3.9))
     runs = _folder(hand)[0]
     seed = report.typical_seed(runs, robot, CONDITION)

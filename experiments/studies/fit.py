@@ -233,7 +233,7 @@ def importances(s, names):
 def objective_figure(s, path):
     """The objective of every complete trial over trial numbers, and the best so far."""
     import optuna
-    plt = report._plt()
+    plt = report.pyplot()
     done = s.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,))
     xs = [t.number for t in done]
     ys = [t.value for t in done]
@@ -266,12 +266,12 @@ def _figure_rows(groups_by_name):
                 if h is None:
                     cells.append("-")
                 elif f == "shrink":
-                    cells.append(report._fmt(h["shrink"], 2))
+                    cells.append(report.fmt(h["shrink"], 2))
                 else:
-                    cells.append(f"{report._fmt(h[f]['mean'])} {report._ci(h[f]['ci95'])}")
+                    cells.append(f"{report.fmt(h[f]['mean'])} {report.interval(h[f]['ci95'])}")
             pv = paper_value(g["drive"], g["condition"], f)
             lines.append(f"| {g['robot']} | {g['condition']} | {f.replace('_', ' ')} | "
-                         f"{report._fmt(pv, 2 if f == 'shrink' else 0)} | " + " | ".join(cells) + " |")
+                         f"{report.fmt(pv, 2 if f == 'shrink' else 0)} | " + " | ".join(cells) + " |")
     return lines
 
 
@@ -370,8 +370,8 @@ def write(s, out, names):
             robot, cond, f = key.split("/")
             from tasks.robots import resolve
             pv = paper_value(resolve(robot).drive, cond, f)
-            lines.append(f"| {key} | {report._fmt(pv, 2 if f == 'shrink' else 0)} | "
-                         f"{report._fmt(v, 2 if f == 'shrink' else 0)} |")
+            lines.append(f"| {key} | {report.fmt(pv, 2 if f == 'shrink' else 0)} | "
+                         f"{report.fmt(v, 2 if f == 'shrink' else 0)} |")
     if s.get_trials(deepcopy=False):
         objective_figure(s, out / "fit_objective.png")
         lines += ["", "![objective over trials](fit_objective.png)", ""]
