@@ -37,18 +37,19 @@ def robot_list(text):
     """--robot: a registered name, several joined by commas, "paper" (the paper's two
     robots), "all" (every registered robot), or a path to a robot .xml file (with
     --drive). The names come from the registry, tasks/robots.py."""
-    from tasks.robots import PAPER_ROBOTS, ROBOTS
+    from tasks.robots import MOUNTS, PAPER_ROBOTS, ROBOTS
     if text == "paper":
         return PAPER_ROBOTS
     if text == "all":
         return tuple(ROBOTS)
-    if text.lower().endswith(".xml"):
+    if text.lower().endswith((".xml", ".toml")) or text in MOUNTS:
         return (text,)
     names = tuple(n.strip() for n in text.split(","))
     for n in names:
         if n not in ROBOTS:
             raise argparse.ArgumentTypeError(
                 f"unknown robot {n!r}; valid: {', '.join(ROBOTS)}, paper, all, "
+                f"{', '.join(MOUNTS)}, a mount file (.toml), "
                 "or a path to a robot .xml file with --drive")
     return names
 
@@ -422,6 +423,12 @@ def cmd_robots(args):
         text = ", ".join(f"{k}={v:.3g}" if isinstance(v, float) else f"{k}={v}"
                          for k, v in r.readings)
         print(f"{r.name:<12} {text or 'none: the config fields defaults'}")
+    from tasks.robots import MOUNTS, resolve
+    print("\nMounted robot files, unchanged (models/mounts/*.toml; docs/adding_a_robot.md):")
+    for name in MOUNTS:
+        r = resolve(name)
+        print(f"{r.name:<12} {r.drive:<10} {r.table1:<8} {r.budget:>8,}  {r.avoidance:<9} "
+              f"{r.description} ({r.unit:.3g} m per unit)")
     return 0
 
 

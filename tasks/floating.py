@@ -12,7 +12,6 @@ import mujoco
 import numpy as np
 
 import models
-from models import UNIT
 from tasks import kernels, navigation
 from tasks.config import THRUSTS
 
@@ -98,7 +97,7 @@ class Physics(navigation.Physics):
 
     def thrust_scale(self):
         """The force per unit/step of velocity change in one substep."""
-        return UNIT / self.step_seconds * self._mass / self.timestep
+        return self.unit / self.step_seconds * self._mass / self.timestep
 
     def thrust(self, dvx, dvy):
         """Sets the thrust that changes the velocity by (dvx, dvy) units/step in one substep."""
@@ -117,7 +116,7 @@ class Floating(navigation.Navigation):
         n = substeps(physics.timestep, self.time_scale)
         self.kernel_settings(physics, 1, n - 1, (MAX_ACCELERATION, 0.0))
         physics._kints[kernels.I_THRUST] = THRUSTS.index(self.config.thrust)
-        physics._kfloats[kernels.F_VELOCITY] = physics.step_seconds / UNIT
+        physics._kfloats[kernels.F_VELOCITY] = physics.step_seconds / physics.unit
         physics._kfloats[kernels.F_THRUST] = physics.thrust_scale()
         physics._kints[kernels.I_VELOCITY_CODE] = self.config.velocity_code == "code"
         physics._kfloats[kernels.F_VELOCITY_FULL] = VELOCITY_FULL_SCALE

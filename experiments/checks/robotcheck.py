@@ -88,6 +88,7 @@ def accuracy(robot, actions=1000, seed=0, drive=None):
     limits = ({"turn": ACCURACY * two_wheel.MAX_TURN, "move": ACCURACY * two_wheel.MAX_MOVE}
               if entry.drive == "two_wheel" else
               {k: ACCURACY * floating.MAX_ACCELERATION for k in ("velocity_x", "velocity_y")})
+    limits.update((k, v) for k, v in entry.accuracy_limits if k in limits)  # a body's own
     return {k: np.abs(v) for k, v in errors.items()}, limits
 
 
