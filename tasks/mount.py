@@ -60,7 +60,7 @@ _TOP = {"name", "description", "file", "drive", "unit", "base", "joints", "drop"
 _BUMPER = {"geom", "shape", "radius", "height", "half_length"}
 _BEAMS = {"height", "sensors"}
 _ACTION = {"kind", "forward", "turn", "grip", "thrust_x", "thrust_y", "left", "right", "gait",
-           "kp", "kv", "force"}
+           "kp", "kv", "force", *(f"{j}_{i}" for j in ("hip", "ankle") for i in range(4))}
 
 
 class MountError(ValueError):
@@ -235,6 +235,8 @@ def parse(path):
                       for k, d in (("kp", 2.0), ("kv", 0.05), ("force", 0.12)))
         gait = gains
     elif kind == "gait":
+        roles = tuple((r, text(action, r, f"action.{r}")) for r in
+                      (f"{j}_{i}" for j in ("hip", "ankle") for i in range(4)) if r in action)
         g = action.get("gait", {})
         if not isinstance(g, dict):
             fail("action.gait", "must be a table")
@@ -324,7 +326,7 @@ def robot_spec(mount):
 
     # -- drop -------------------------------------------------------------------
     drop = set(mount.drop)
-    if kind in ("servos", "thrusters", "wheels", "gait"):
+    if kind in ("servos", "thrusters", "wheels"):
         drop |= {"actuators"}      # the drive's own actuators replace the file's
     if mount.joints == "planar":
         drop |= {"actuators", "tendons"}   # they may act on the joints replaced
@@ -476,6 +478,7 @@ def robot_spec(mount):
     elif kind == "gait":
         from tasks import gait
         gait.check_file(mount, spec)
+        names.update((role, name) for role, name in mount.action[1:] if role != name)
 
     # -- options ------------------------------------------------------------------
     room = mujoco.MjSpec.from_file(str(models.ROOM_FILE))
@@ -563,7 +566,7 @@ def physics_class(mount):
         return floating.Physics
     if kind == "gait":
         from tasks import gait
-        return gait.Physics
+        return gait.physics_class(mount)
     return two_wheel.WheelPhysics if kind == "wheels" else two_wheel.Physics
 
 

@@ -19,6 +19,7 @@ SOURCES = {
     "point": lambda: importlib.resources.files("gymnasium") / "envs/mujoco/assets/point.xml",
     "point_mass": lambda: importlib.resources.files("dm_control") / "suite/point_mass.xml",
     "car": lambda: ROOT / "models" / "vendor" / "mujoco_car" / "car.xml",
+    "ant": lambda: importlib.resources.files("dm_control") / "third_party/ant/ant.xml",
 }
 #: model/car/car.xml's git blob in google-deepmind/mujoco (last changed upstream in a276c49).
 CAR_BLOB = "0ab791f05ad6b022e573a7bb13af6aa0efdddc1d"
@@ -195,3 +196,43 @@ def test_mounted_planar_robots_do_what_their_drive_promises():
         errors, limits = robotcheck.accuracy(name, 100)
         for key, e in errors.items():
             assert e.max() <= limits[key], (name, key, e.max())
+
+
+def test_the_fused_loop_refuses_the_gait_drive_and_takes_a_mounted_two_wheel_robot():
+    from experiments.running import fused
+    for name, supported in (("ant", False), ("point", True)):
+        env = tasks.load(name, seed=0)
+        try:
+            agent = protocol.make_agent(protocol.RunSpec(name, "avoidance", 0, 10), env)
+            assert fused.Loop.supports(env, agent) is supported, name
+        finally:
+            env.close()
+
+
+def test_the_ant_walks_the_two_wheel_actions_within_its_stated_limits():
+    """The gait drive (tasks/gait.py) over 60 random free-space actions: the turn and the
+    move errors within the limits the ant's mount states, and no fall in 200 random
+    actions that ram the walls."""
+    from experiments.checks import robotcheck
+    errors, limits = robotcheck.accuracy("ant", 60, seed=1)
+    assert limits == {"turn": 0.08, "move": 0.12}
+    for key, e in errors.items():
+        assert e.max() <= limits[key], (key, e.max())
+    assert np.median(errors["turn"]) < 0.03 and np.median(errors["move"]) < 0.06
+    r = robotcheck.fuzz("ant", 200, seed=3)
+    assert r["falls"] == 0 and r["nan_steps"] == 0 and r["warnings"] == 0
+
+
+def test_a_fall_of_the_gait_is_a_physics_error():
+    from dm_control.rl import control
+    env = tasks.load("ant", seed=0)
+    try:
+        env.reset()
+        physics = env.physics
+        physics.data.qpos[3:7] = (math.cos(0.4), math.sin(0.4), 0.0, 0.0)  # rolled 46 degrees
+        physics.data.qpos[2] = 1.5
+        physics.forward()
+        with pytest.raises(control.PhysicsError, match="tipped over"):
+            env.step([0.0])
+    finally:
+        env.close()
