@@ -128,12 +128,12 @@ def _camera(physics, camera):
     """A camera name of the model, or an MjvCamera for follow."""
     import mujoco
 
-    from models import PREFIX
+    from models import PREFIX, contract_names
     m = physics.model
     if camera == "follow":
         cam = mujoco.MjvCamera()
         cam.type = mujoco.mjtCamera.mjCAMERA_TRACKING
-        cam.trackbodyid = m.name2id(PREFIX + "base", "body")
+        cam.trackbodyid = m.name2id(PREFIX + contract_names(m).get("base", "base"), "body")
         cam.elevation, cam.azimuth, radii = FOLLOW
         cam.distance = max(FOLLOW_MIN_DISTANCE, radii * physics.robot_radius * physics.unit)
         return cam
