@@ -236,3 +236,34 @@ def test_a_fall_of_the_gait_is_a_physics_error():
             env.step([0.0])
     finally:
         env.close()
+
+
+def test_an_installed_copy_finds_the_shipped_mounts_and_behaviours_by_name(tmp_path):
+    """A non-editable install (pip install --no-deps --target, from a copy of the tracked
+    files) holds the mounts, the vendored car and the paper's behaviour files as package
+    data; from elsewhere, that copy loads the car and finds paper_eq8 by name."""
+    import shutil
+    import subprocess
+    import sys
+    source = tmp_path / "source"
+    files = subprocess.run(["git", "ls-files", "--cached", "--others", "--exclude-standard"],
+                           cwd=ROOT, capture_output=True, text=True, check=True).stdout.split()
+    for name in files:
+        if (ROOT / name).is_file():
+            (source / name).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(ROOT / name, source / name)
+    target = tmp_path / "site"
+    subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--target",
+                    str(target), str(source)], check=True, capture_output=True)
+    code = ("import tasks, ebrl.behaviour as b\n"
+            "assert tasks.__file__.startswith(%r)\n"
+            "assert sorted(tasks.MOUNTS) == ['ant', 'car', 'point', 'point_mass']\n"
+            "assert tasks.resolve('car').model.is_relative_to(%r)\n"
+            "env = tasks.load('car'); env.reset(); env.step([0.0]); env.close()\n"
+            "print(b.load('paper_eq8').behaviour, b.load('behaviours/paper_eq9-10.json').behaviour)\n"
+            % (str(target), str(target)))
+    proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
+                          text=True, env={"PYTHONPATH": str(target), "PATH": "/usr/bin:/bin",
+                                          "HOME": str(tmp_path)})
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split() == ["eq8", "eq9-10"]
