@@ -330,41 +330,27 @@ def robot_spec(mount):
         drop |= {"actuators"}      # the drive's own actuators replace the file's
     if mount.joints == "planar":
         drop |= {"actuators", "tendons"}   # they may act on the joints replaced
-    for name in mount.drop_bodies:
-        body = spec.body(name)
-        if body is None:
-            _fail(mount, "drop_bodies", f"no body named {name!r} in {mount.model}")
-        spec.delete(body)
-    for name in mount.drop_geoms:
-        geom = spec.geom(name)
-        if geom is None:
-            _fail(mount, "drop_geoms", f"no geom named {name!r} in {mount.model}")
-        spec.delete(geom)
-    if "world" in drop:
-        for geom in list(spec.worldbody.geoms):
-            spec.delete(geom)
-    if "lights" in drop:
-        for light in list(spec.lights):
-            spec.delete(light)
-    if "cameras" in drop:
-        for camera in list(spec.cameras):
-            spec.delete(camera)
-    if "skybox" in drop:
-        for texture in list(spec.textures):
-            if texture.type == mujoco.mjtTexture.mjTEXTURE_SKYBOX:
-                spec.delete(texture)
     if kind == "actuators":
         for role, name in mount.action[1:]:
             if _by_name(spec.actuators, name) is None:
                 _fail(mount, f"action.{role}", f"no actuator named {name!r} in {mount.model}")
             if name != role:
                 names[role] = name
-    if "actuators" in drop:
-        for actuator in list(spec.actuators):
-            spec.delete(actuator)
-    if "tendons" in drop:
-        for tendon in list(spec.tendons):
-            spec.delete(tendon)
+    for field, find in (("drop_bodies", spec.body), ("drop_geoms", spec.geom)):
+        for name in getattr(mount, field):
+            element = find(name)
+            if element is None:
+                _fail(mount, field, f"no {field[5:-1]} named {name!r} in {mount.model}")
+            spec.delete(element)
+    skybox = mujoco.mjtTexture.mjTEXTURE_SKYBOX
+    elements = {"world": lambda: spec.worldbody.geoms, "lights": lambda: spec.lights,
+                "cameras": lambda: spec.cameras, "actuators": lambda: spec.actuators,
+                "tendons": lambda: spec.tendons,
+                "skybox": lambda: [x for x in spec.textures if x.type == skybox]}
+    for category, listed in elements.items():
+        if category in drop:
+            for element in list(listed()):
+                spec.delete(element)
     beam_names = mount.beams[1:] if mount.beams[0] == "sensors" else ()
     for name in beam_names:
         sensor = _by_name(spec.sensors, name)

@@ -158,7 +158,14 @@ BAD = [
      'geom = "pointbody"\n[beams]\nheight = 0.5\n[action]\nkind = "wheels"\nleft = "a"\nright = "b"',
      "joints: body 'torso' has joints of its own"),
     ('file = "{pt}"\ndrive = "two_wheel"\nbase = "torso"\n[bumper]\nradius = 0.2\n'
-     '[beams]\nheight = 0.5\n[action]\nkind = "servos"', "bumper: missing"),
+     '[beams]\nheight = 0.5\n[action]\nkind = "servos"', "bumper: missing"),    ('file = "{pt}"\ndrive = "floating"\nbase = "torso"\n[bumper]\ngeom = "pointbody"\n'
+     '[beams]\nheight = 0.5\n[action]\nkind = "wheels"', "action.kind: the floating drive takes one of"),
+    ((MOUNTS / "ant.toml").read_text().replace('hip_3 = "back_left_hip"\n', "").replace(
+        '"dm_control:', '"{{ant}}').replace("third_party/ant/ant.xml", ""),
+     "action.hip_3: missing: the file's motor for it"),
+    ((MOUNTS / "ant.toml").read_text().replace("frequency = 1.0", "speed = 1.0").replace(
+        '"dm_control:', '"{{ant}}').replace("third_party/ant/ant.xml", ""),
+     "action.gait.speed: unknown key"),
 ]
 
 
@@ -166,7 +173,8 @@ BAD = [
 def test_a_bad_mount_is_one_line_naming_the_field_and_the_file(tmp_path, text, message):
     path = tmp_path / "bad.toml"
     point = pathlib_path(SOURCES["point"]())
-    path.write_text(text.format(pt=point))
+    ant = pathlib_path(SOURCES["ant"]())
+    path.write_text(text.format(pt=point).replace("{ant}", str(ant)))
     with pytest.raises(mount.MountError) as e:
         tasks.load(str(path)).close()
     line = str(e.value)
