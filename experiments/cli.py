@@ -46,7 +46,7 @@ def robot_list(text):
         return (text,)
     names = tuple(n.strip() for n in text.split(","))
     for n in names:
-        if n not in ROBOTS:
+        if n not in ROBOTS and n not in MOUNTS:
             raise argparse.ArgumentTypeError(
                 f"unknown robot {n!r}; valid: {', '.join(ROBOTS)}, paper, all, "
                 f"{', '.join(MOUNTS)}, a mount file (.toml), "
