@@ -303,9 +303,27 @@ def from_dict(data):
     return cls(**values)
 
 
-def load(path):
-    """The genome in a JSON file; GenomeError (one line, naming the file) otherwise."""
+def shipped(path):
+    """A shipped behaviour file (the `behaviours` package's data: paper_eq8.json,
+    paper_eq9-10.json) named by its file name, its stem or behaviours/<name>, where no
+    file lies at `path` itself: found in an installed copy as in a clone."""
     path = pathlib.Path(path)
+    if path.is_file() or path.is_absolute() or (len(path.parts) > 1 and path.parts[0] != "behaviours"):
+        return path
+    import importlib.resources
+    try:
+        folder = importlib.resources.files("behaviours")
+    except ModuleNotFoundError:
+        return path
+    name = path.name if path.suffix == ".json" else path.name + ".json"
+    found = folder / name
+    return pathlib.Path(str(found)) if found.is_file() else path
+
+
+def load(path):
+    """The genome in a JSON file (or a shipped one by name, `shipped`); GenomeError (one
+    line, naming the file) otherwise."""
+    path = shipped(path)
     try:
         data = json.loads(path.read_text())
     except OSError as e:

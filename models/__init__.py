@@ -49,10 +49,18 @@ for _name in ("mujoco", "dm_control.mujoco"):  # each reads MUJOCO_GL once, at i
 
 import mujoco  # noqa: E402
 
-#: Metres per paper unit. The only place where paper units meet SI units.
+#: Metres per paper unit for the paper's robots. A robot larger than the paper's may have
+#: its own (tasks.robots.Robot.unit, a mount's `unit`): the room, the start, the goal and
+#: the beams' range scale with it; a composed model records a unit other than this one
+#: in its numeric element UNIT_NUMERIC, and `unit_of` reads it back.
 UNIT = 0.1
 #: The name prefix of every element a robot file brings into the room.
 PREFIX = "robot/"
+#: The numeric element of a composed model that holds its metres per paper unit.
+UNIT_NUMERIC = "ebrl_unit"
+#: The text element of a mounted model that maps the naming contract's names to the
+#: file's ("base=torso hull=pointbody ..."; tasks.mount).
+NAMES_TEXT = "ebrl_names"
 
 MODEL_DIR = pathlib.Path(__file__).resolve().parent
 ROOM_FILE = MODEL_DIR / "room.xml"
@@ -63,20 +71,25 @@ INTEGRATORS = {"Euler": mujoco.mjtIntegrator.mjINT_EULER,
                "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST}
 
 
-def compose(robot_file, *, timestep=None, integrator=None):
+def compose(robot_file, *, timestep=None, integrator=None, unit=UNIT, robot=None):
     """An MjSpec of the room with the robot file attached at the origin.
 
     timestep (s) and integrator ("Euler", "implicitfast", ...) replace the room's
     when given: a robot file's own <option> is not used (attaching keeps the room's).
+    unit: metres per paper unit; the room is scaled by unit / UNIT about the origin
+    (scale_room). robot: the robot's MjSpec, already made (a mount's); else the file's.
     """
     path = pathlib.Path(robot_file)
     if not path.is_file():
         raise ValueError(f"no robot file at {path}")
     room = mujoco.MjSpec.from_file(str(ROOM_FILE))
-    try:
-        robot = mujoco.MjSpec.from_file(str(path))
-    except ValueError as e:
-        raise ValueError(f"{path} is not a MuJoCo model: {str(e).splitlines()[0]}") from None
+    if unit != UNIT:
+        scale_room(room, unit)
+    if robot is None:
+        try:
+            robot = mujoco.MjSpec.from_file(str(path))
+        except ValueError as e:
+            raise ValueError(f"{path} is not a MuJoCo model: {str(e).splitlines()[0]}") from None
     # The robot file's own <option> is not attached (tasks.robots.file_options reads its
     # timestep and integrator); aligned here so that attaching has no conflict to warn of.
     robot.option.timestep, robot.option.integrator = room.option.timestep, room.option.integrator
@@ -90,6 +103,43 @@ def compose(robot_file, *, timestep=None, integrator=None):
     return room
 
 
+def scale_room(room, unit):
+    """Scales the room's world (its geoms, sites, cameras and lights: positions and
+    sizes) by unit / UNIT about the origin, and records the unit in the model
+    (UNIT_NUMERIC), so the room is the paper's in paper units at `unit` metres each."""
+    if not (isinstance(unit, (int, float)) and unit > 0 and np.isfinite(unit)):
+        raise ValueError(f"unit must be a positive number of metres, got {unit!r}")
+    s = float(unit) / UNIT
+    for geom in room.worldbody.geoms:
+        geom.pos = np.asarray(geom.pos) * s
+        geom.size = np.asarray(geom.size) * s
+    for site in room.worldbody.sites:
+        site.pos = np.asarray(site.pos) * s
+        site.size = np.asarray(site.size) * s
+    for item in (*room.worldbody.cameras, *room.worldbody.lights):
+        item.pos = np.asarray(item.pos) * s
+    room.add_numeric(name=UNIT_NUMERIC, data=[float(unit)])
+    return room
+
+
+def unit_of(model):
+    """Metres per paper unit of a composed model (an MjModel, or dm_control's wrapper)."""
+    m = getattr(model, "ptr", model)
+    i = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_NUMERIC, UNIT_NUMERIC)
+    return UNIT if i < 0 else float(m.numeric_data[m.numeric_adr[i]])
+
+
+def contract_names(model):
+    """{contract name: the file's name} of a mounted model (tasks.mount); {} otherwise."""
+    m = getattr(model, "ptr", model)
+    i = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_TEXT, PREFIX + NAMES_TEXT)  # attached
+    if i < 0:
+        return {}
+    adr, size = int(m.text_adr[i]), int(m.text_size[i])
+    text = bytes(m.text_data[adr: adr + size]).rstrip(b"\0").decode()
+    return dict(pair.split("=", 1) for pair in text.split())
+
+
 def room_layout(model):
     """(field, obstacles, goal, start) of a compiled room, in paper units.
 
@@ -97,8 +147,10 @@ def room_layout(model):
     the world's colliding boxes inside the field, as rectangles; start: (x, y, heading)
     of the start site. The room as simulated, so figures and the optimal path follow
     any room file."""
+    unit = unit_of(model)
+
     def rect(pos, size):
-        (cx, cy), (hx, hy) = np.asarray(pos[:2]) / UNIT, np.asarray(size[:2]) / UNIT
+        (cx, cy), (hx, hy) = np.asarray(pos[:2]) / unit, np.asarray(size[:2]) / unit
         return float(cx - hx), float(cx + hx), float(cy - hy), float(cy + hy)
 
     floor, goal, start = model.geom("floor"), model.site("goal"), model.site("start")
@@ -106,12 +158,12 @@ def room_layout(model):
     obstacles = []
     for i in range(model.ngeom):
         g = model.geom(i)
-        x, y = g.pos[:2] / UNIT
+        x, y = g.pos[:2] / unit
         if (int(g.bodyid[0]) == 0 and int(g.type[0]) == mujoco.mjtGeom.mjGEOM_BOX
                 and g.contype[0] & 1 and field[0] < x < field[1] and field[2] < y < field[3]):
             obstacles.append(rect(g.pos, g.size))
     heading = float(np.arctan2(*_planar_axis(start.quat)[::-1]))
-    return field, obstacles, rect(goal.pos, goal.size), (*(start.pos[:2] / UNIT), heading)
+    return field, obstacles, rect(goal.pos, goal.size), (*(start.pos[:2] / unit), heading)
 
 
 def _planar_axis(quat):

@@ -15,9 +15,10 @@ from dm_control.rl import control  # noqa: E402
 
 from tasks import floating, navigation, render, two_wheel  # noqa: E402
 from tasks.config import TaskConfig  # noqa: E402
-from tasks.robots import DRIVES, PAPER_ROBOTS, ROBOTS, Robot, resolve  # noqa: E402
+from tasks.robots import DRIVES, MOUNTS, PAPER_ROBOTS, ROBOTS, Robot, resolve  # noqa: E402
 
-__all__ = ["load", "compile_robot", "TaskConfig", "ROBOTS", "PAPER_ROBOTS", "DRIVES", "Robot", "resolve"]
+__all__ = ["load", "compile_robot", "TaskConfig", "ROBOTS", "MOUNTS", "PAPER_ROBOTS", "DRIVES", "Robot",
+           "resolve"]
 
 # drive -> (Task class, Physics classes by the actuator that marks them, substeps the
 # Environment runs per agent step, the task config's edit of the model spec)
@@ -77,18 +78,29 @@ class Environment(control.Environment):
 def compile_robot(entry, config=TaskConfig()):
     """(MjModel, MjSpec) of the room with the registry entry's robot, and the task
     config's changes to the model: the robot's radius, the floating bump's walls."""
-    spec = models.compose(entry.model, timestep=entry.timestep, integrator=entry.integrator)
+    robot = None
+    if entry.mount is not None:
+        from tasks import mount
+        robot = mount.robot_spec(entry.mount)
+    spec = models.compose(entry.model, timestep=entry.timestep, integrator=entry.integrator,
+                          unit=entry.unit, robot=robot)
     _DRIVES[entry.drive][3](spec, config)
     try:
         return spec.compile(), spec
     except ValueError as e:
-        raise ValueError(f"robot file {entry.model} does not compile in the room: "
+        raise ValueError(f"{_source(entry)} does not compile in the room: "
                          f"{str(e).splitlines()[0]}") from None
 
 
+def _source(entry):
+    """What an error names: the mount file of a mounted robot, else the robot file."""
+    return f"mount {entry.mount.path}" if entry.mount is not None else f"robot file {entry.model}"
+
+
 def load(robot, *, drive=None, seed=None, config=None, **fields):
-    """The navigation environment for `robot`: a name in tasks.ROBOTS, or a path to a
-    robot file with drive "two_wheel" or "floating". config: a TaskConfig (default: the
+    """The navigation environment for `robot`: a name in tasks.ROBOTS or tasks.MOUNTS, a
+    path to a mount file (.toml, tasks.mount), or a path to a robot file with drive
+    "two_wheel" or "floating". config: a TaskConfig (default: the
     paper's with the robot's readings, Robot.task_config); fields: TaskConfig fields to
     change (sensor_noise=0.0, bump="slide", ...)."""
     entry = robot if isinstance(robot, Robot) else resolve(robot, drive)
@@ -99,10 +111,16 @@ def load(robot, *, drive=None, seed=None, config=None, **fields):
              for i in range(model.nu)}
     physics_cls = next((cls for act, cls in physics_classes.items()
                         if models.PREFIX + act in names), physics_classes[next(iter(physics_classes))])
+    if entry.mount is not None:
+        from tasks import mount
+        physics_cls = mount.physics_class(entry.mount)
+        if entry.mount.action[0] == "gait":
+            from tasks import gait
+            task_cls, n_sub_steps = gait.Gait, gait.move_substeps
     try:
         physics = physics_cls.from_model(wrapper.MjModel(model))
     except navigation.ContractError as e:
-        raise navigation.ContractError(f"robot file {entry.model}: {e}") from None
+        raise navigation.ContractError(f"{_source(entry)}: {e}") from None
     task = task_cls(config, time_scale=entry.time_scale, random=np.random.RandomState(seed))
     return Environment(physics, task, n_sub_steps=n_sub_steps(physics.timestep, entry.time_scale),
                        time_limit=float("inf"))

@@ -11,7 +11,6 @@ import mujoco
 import numpy as np
 
 import models
-from models import UNIT
 from tasks import kernels, navigation
 from tasks.config import THRUSTS
 
@@ -92,7 +91,7 @@ class Physics(navigation.Physics):
 
     def thrust_scale(self):
         """The force per unit/step of velocity change in one substep."""
-        return UNIT / self.step_seconds * self._mass / self.timestep
+        return self.unit / self.step_seconds * self._mass / self.timestep
 
     def thrust(self, dvx, dvy):
         """Sets the thrust that changes the velocity by (dvx, dvy) units/step in one substep."""
@@ -117,7 +116,7 @@ class Floating(navigation.Navigation):
         n = substeps(physics.timestep, self.time_scale)
         self.start_drive(physics, **self.kernel_settings(1, n - 1, (MAX_ACCELERATION, 0.0)),
                          thrust=THRUSTS.index(self.config.thrust),
-                         velocity=physics.step_seconds / UNIT,
+                         velocity=physics.step_seconds / physics.unit,
                          thrust_force=physics.thrust_scale(),
                          velocity_code=self.config.velocity_code == "code",
                          velocity_full=VELOCITY_FULL_SCALE)

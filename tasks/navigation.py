@@ -19,7 +19,7 @@ from dm_control.rl import control
 from dm_control.suite import base
 from dm_env import specs
 
-from models import PREFIX, UNIT, room_layout
+from models import NAMES_TEXT, PREFIX, UNIT, UNIT_NUMERIC, contract_names, room_layout, unit_of
 from tasks import kernels
 from tasks.config import TaskConfig
 
@@ -61,13 +61,23 @@ def encode_range(distance, noise=_NO_NOISE, sensor_range=TaskConfig.sensor_range
 def edit_model(spec, config):
     """The task config's changes to the composed model (an MjSpec): the robot's radius."""
     if config.radius is not None:
+        unit = spec.numeric(UNIT_NUMERIC)
+        unit = UNIT if unit is None else float(unit.data[0])
         for name, part in (("hull", True), ("shell", False)):
-            geom = spec.geom(PREFIX + name)
+            geom = spec.geom(PREFIX + spec_name(spec, name))
             if geom is None:
                 if part:
                     raise ContractError("no geom named 'hull' (the bumper; its radius is the robot's)")
                 continue
-            geom.size[0] = config.radius * UNIT
+            geom.size[0] = config.radius * unit
+
+
+def spec_name(spec, name):
+    """The file's name for a contract name in a composed spec (a mount's map, tasks.mount)."""
+    text = spec.text(PREFIX + NAMES_TEXT)  # the robot's, attached under the prefix
+    if text is None:
+        return name
+    return dict(pair.split("=", 1) for pair in text.data.split()).get(name, name)
 
 
 def substeps(seconds, timestep):
@@ -76,7 +86,9 @@ def substeps(seconds, timestep):
 
 
 def named_id(model, kind, name):
-    """The id of the robot's part `name` (its prefixed MJCF name), -1 for none."""
+    """The id of the robot's part with a contract name (its prefixed MJCF name, or its
+    file's name where a mount maps it: models.contract_names), -1 for none."""
+    name = contract_names(model).get(name, name) if model.ptr.ntext else name
     return mujoco.mj_name2id(model.ptr, kind, PREFIX + name)
 
 
@@ -91,6 +103,8 @@ class Physics(dm_mujoco.Physics):
         super()._reload_from_data(data)
         m = self.model
         mjm = m.ptr
+        #: Metres per paper unit (models.unit_of: the paper's 0.1 unless the robot's own).
+        self.unit = unit = unit_of(mjm)
         self._base = named_id(m, mujoco.mjtObj.mjOBJ_BODY, "base")
         if self._base < 0:
             raise ContractError("no body named 'base' (the robot's base body)")
@@ -98,7 +112,7 @@ class Physics(dm_mujoco.Physics):
         if hull < 0:
             raise ContractError("no geom named 'hull' (the bumper; its radius is the robot's)")
         #: The robot's radius in units: its hull's (sphere or cylinder) radius.
-        self.robot_radius = m.geom_size[hull, 0] / UNIT
+        self.robot_radius = m.geom_size[hull, 0] / unit
         beams = np.flatnonzero(m.sensor_type == mujoco.mjtSensor.mjSENS_RANGEFINDER)
         if not len(beams):
             raise ContractError("no rangefinder sensors")
@@ -140,8 +154,8 @@ class Physics(dm_mujoco.Physics):
         (x0, y0), (x1, y1) = self.goal_box
         self._settings = dict(
             qyaw=-1 if self._qyaw is None else self._qyaw, free=self._free is not None,
-            base=self._base, beam0=self._beams.start, beam1=self._beams.stop, unit=UNIT,
-            timestep=self.timestep, metres_to_units=1.0 / UNIT, radius=self.robot_radius,
+            base=self._base, beam0=self._beams.start, beam1=self._beams.stop, unit=unit,
+            timestep=self.timestep, metres_to_units=1.0 / unit, radius=self.robot_radius,
             min_cos_tilt=self._min_cos_tilt, x0=x0, x1=x1, y0=y0, y1=y1)
         self.record = None
         #: Rangefinders (the sensor noise draws one normal for each).
@@ -199,7 +213,7 @@ class Physics(dm_mujoco.Physics):
         else:
             r = self._xmat
             heading = math.atan2(r[3], r[0])
-        return float(p[0]) / UNIT, float(p[1]) / UNIT, heading
+        return float(p[0]) / self.unit, float(p[1]) / self.unit, heading
 
     def tilt(self):
         """Angle in radians between the base's z axis and the vertical."""
@@ -210,14 +224,15 @@ class Physics(dm_mujoco.Physics):
         model, data = self._mj
         v = self._body_velocity
         mujoco.mj_objectVelocity(model, data, mujoco.mjtObj.mjOBJ_BODY, self._base, v, 0)
-        scale = self.step_seconds / UNIT
+        scale = self.step_seconds / self.unit
         return np.array([v[3] * scale, v[4] * scale])
 
     def ranges(self):
         """Distance from the body surface along each beam, in units; inf where nothing is
         hit. Runs the sensor stage once, at the current state."""
         return kernels.ranges(self._m, self._d, self._flags, self._sensordata,
-                              self._beams.start, self._beams.stop, 1.0 / UNIT, self.robot_radius)
+                              self._beams.start, self._beams.stop, 1.0 / self.unit,
+                              self.robot_radius)
 
     def render(self, height=240, width=320, camera_id=-1, scene_option=None,
                scene_callback=None):
@@ -264,10 +279,10 @@ class Physics(dm_mujoco.Physics):
             model, _ = self._mj
             q[:] = model.qpos0
             a = self._free
-            q[a: a + 3] = x * UNIT, y * UNIT, self._rest_height
+            q[a: a + 3] = x * self.unit, y * self.unit, self._rest_height
             q[a + 3: a + 7] = math.cos(heading / 2), 0.0, 0.0, math.sin(heading / 2)
         else:
-            q[self._qx], q[self._qy] = x * UNIT, y * UNIT
+            q[self._qx], q[self._qy] = x * self.unit, y * self.unit
             if self._qyaw is not None:
                 q[self._qyaw] = heading
         self._qvel[:] = 0.0

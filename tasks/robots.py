@@ -16,6 +16,11 @@ import dataclasses
 import pathlib
 
 MODEL_DIR = pathlib.Path(__file__).resolve().parents[1] / "models"
+#: The shipped mounts (tasks.mount): third-party robot files, unchanged, by name.
+MOUNT_DIR = MODEL_DIR / "mounts"
+#: Metres per paper unit of the paper's robots (models.UNIT; repeated here so that this
+#: module imports nothing heavy).
+PAPER_UNIT = 0.1
 
 
 @dataclasses.dataclass(frozen=True)
@@ -64,6 +69,14 @@ class Robot:
     #: (field, value) pairs on top of the drive's readings (Drive.readings): the body's.
     readings: tuple = ()
     description: str = ""
+    #: Metres per paper unit: the room, the start, the goal and the beams' range scale
+    #: with it (models.compose); every distance the task reports stays in paper units.
+    unit: float = PAPER_UNIT
+    #: The mount (tasks.mount.Mount) that enters a file not of the naming contract.
+    mount: object = None
+    #: `ebrl check`'s accuracy limits where the drive's 5% is not asked of the body (a
+    #: mount's [check]), as (error, limit) pairs.
+    accuracy_limits: tuple = ()
 
     def __post_init__(self):
         if self.drive not in DRIVES:
@@ -116,15 +129,23 @@ PAPER_ROBOTS = ("two_wheel", "floating")
 def resolve(robot, drive=None):
     """A Robot from a registered name, or from a path to an MJCF file with a drive.
 
-    A registered name with a drive is refused unless the drive is the robot's own."""
+    A registered name with a drive is refused unless the drive is the robot's own. A
+    shipped mount's name (MOUNTS) or a path to a mount file (.toml) gives its entry."""
+    if isinstance(robot, Robot):
+        return robot
     if robot in ROBOTS:
         entry = ROBOTS[robot]
         if drive is not None and drive != entry.drive:
             raise ValueError(f"robot {robot!r} has the {entry.drive} drive, not {drive!r}")
         return entry
     path = pathlib.Path(robot)
+    if robot in MOUNTS or path.suffix.lower() == ".toml":
+        if drive is not None:
+            raise ValueError(f"robot {robot!r} is a mount: its drive is in the mount, not --drive")
+        return _mounted(str(MOUNTS.get(robot, path)))
     if path.suffix.lower() != ".xml":
         raise ValueError(f"unknown robot {robot!r}; valid: {', '.join(ROBOTS)}, "
+                         f"{', '.join(MOUNTS)}, a mount file (.toml), "
                          "or a path to a robot .xml file with --drive")
     if not path.is_file():
         raise ValueError(f"no robot file at {path}")
@@ -133,6 +154,22 @@ def resolve(robot, drive=None):
     if drive not in DRIVES:
         raise ValueError(f"unknown drive {drive!r}; valid: {', '.join(DRIVES)}")
     return Robot(str(path), path.resolve(), drive, **file_options(path))
+
+
+#: The shipped mounts by name: models/mounts/<name>.toml.
+MOUNTS = {p.stem: p for p in sorted(MOUNT_DIR.glob("*.toml"))}
+
+
+def _mounted(path):
+    """The entry of a mount file, parsed once per process and path."""
+    key = str(pathlib.Path(path).resolve())
+    if key not in _MOUNTED:
+        from tasks import mount
+        _MOUNTED[key] = mount.load(path)
+    return _MOUNTED[key]
+
+
+_MOUNTED = {}
 
 
 def file_options(path):

@@ -15,7 +15,6 @@ import math
 
 import numpy as np
 
-from models import UNIT
 from tasks import kernels, navigation
 
 MAX_TURN = 1.0  # rad per step
@@ -68,7 +67,7 @@ class Physics(navigation.Physics):
     def drive(self, speed, yaw_rate):
         """Servo targets: speed in units/s along the heading, yaw rate in rad/s."""
         ctrl = self._ctrl
-        ctrl[self._forward] = speed * UNIT
+        ctrl[self._forward] = speed * self.unit
         ctrl[self._turn] = yaw_rate
 
     def begin_turn(self, angle, n):
@@ -182,7 +181,7 @@ class WheelPhysics(navigation.Physics):
 
     def begin_move(self, distance, n):
         """Moves `distance` units forward over an n-substep phase."""
-        w = distance * UNIT / self.wheel_radius
+        w = distance * self.unit / self.wheel_radius
         self._wheel_speeds(w, w, n)
 
     def step(self, nstep=1):

@@ -19,7 +19,8 @@ MODELS = ROOT / "models"
 def test_every_command_takes_its_robots_from_the_registry():
     listed = ebrl("robots")
     assert listed.returncode == 0
-    table, readings = listed.stdout.split("\n\n")
+    table, readings, mounted = listed.stdout.split("\n\n")
+    assert [line.split()[0] for line in mounted.splitlines()[1:]] == list(tasks.MOUNTS)
     names = [line.split()[0] for line in table.splitlines()[1:]]
     assert names == list(tasks.ROBOTS) and {"diff_drive", "hovercraft"} <= set(names)
     assert [line.split()[0] for line in readings.splitlines()[1:]] == names

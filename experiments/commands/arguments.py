@@ -14,19 +14,21 @@ from experiments.running import settings
 def robot_list(text):
     """--robot: a registered name, several joined by commas, "paper" (the paper's two
     robots), "all" (every registered robot), or a path to a robot .xml file (with
-    --drive). The names come from the registry, tasks/robots.py."""
-    from tasks.robots import PAPER_ROBOTS, ROBOTS
+    --drive), or a mount (a shipped mount's name, or a .toml file: tasks/mount.py). The
+    names come from the registry, tasks/robots.py."""
+    from tasks.robots import MOUNTS, PAPER_ROBOTS, ROBOTS
     if text == "paper":
         return PAPER_ROBOTS
     if text == "all":
         return tuple(ROBOTS)
-    if text.lower().endswith(".xml"):
+    if text.lower().endswith((".xml", ".toml")) or text in MOUNTS:
         return (text,)
     names = tuple(n.strip() for n in text.split(","))
     for n in names:
-        if n not in ROBOTS:
+        if n not in ROBOTS and n not in MOUNTS:
             raise argparse.ArgumentTypeError(
                 f"unknown robot {n!r}; valid: {', '.join(ROBOTS)}, paper, all, "
+                f"{', '.join(MOUNTS)}, a mount file (.toml), "
                 "or a path to a robot .xml file with --drive")
     return names
 

@@ -1,4 +1,5 @@
-"""`ebrl robots`: the registered robots, their budgets and the readings each one sets."""
+"""`ebrl robots`: the registered robots, their budgets and the readings each one sets,
+then the mounted robot files."""
 
 
 def add_parser(subparsers):
@@ -7,7 +8,7 @@ def add_parser(subparsers):
 
 
 def run(args):
-    from tasks.robots import ROBOTS
+    from tasks.robots import MOUNTS, ROBOTS, resolve
     print(f"{'robot':<12} {'drive':<10} {'Table 1':<8} {'budget':>8}  {'avoidance':<9} description")
     for r in ROBOTS.values():
         print(f"{r.name:<12} {r.drive:<10} {r.table1:<8} {r.budget:>8,}  {r.avoidance:<9} "
@@ -17,4 +18,9 @@ def run(args):
         text = ", ".join(f"{k}={v:.3g}" if isinstance(v, float) else f"{k}={v}"
                          for k, v in r.readings)
         print(f"{r.name:<12} {text or 'none: the config fields defaults'}")
+    print("\nMounted robot files, unchanged (models/mounts/*.toml; docs/adding_a_robot.md):")
+    for name in MOUNTS:
+        r = resolve(name)
+        print(f"{r.name:<12} {r.drive:<10} {r.table1:<8} {r.budget:>8,}  {r.avoidance:<9} "
+              f"{r.description} ({r.unit:.3g} m per unit)")
     return 0

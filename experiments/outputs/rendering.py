@@ -128,14 +128,14 @@ def _camera(physics, camera):
     """A camera name of the model, or an MjvCamera for follow."""
     import mujoco
 
-    from models import PREFIX, UNIT
+    from models import PREFIX, contract_names
     m = physics.model
     if camera == "follow":
         cam = mujoco.MjvCamera()
         cam.type = mujoco.mjtCamera.mjCAMERA_TRACKING
-        cam.trackbodyid = m.name2id(PREFIX + "base", "body")
+        cam.trackbodyid = m.name2id(PREFIX + contract_names(m).get("base", "base"), "body")
         cam.elevation, cam.azimuth, radii = FOLLOW
-        cam.distance = max(FOLLOW_MIN_DISTANCE, radii * physics.robot_radius * UNIT)
+        cam.distance = max(FOLLOW_MIN_DISTANCE, radii * physics.robot_radius * physics.unit)
         return cam
     for name in (camera, PREFIX + camera):
         if name in [m.id2name(i, "camera") for i in range(m.ncam)]:
@@ -154,18 +154,17 @@ def beams(physics, sensor_range):
     the current state (the task computes it for each observation)."""
     import mujoco
 
-    from models import UNIT
     from tasks.navigation import SENSOR_LEVELS, encode_range
     m, d = physics.model.ptr, physics.data.ptr
     ids = np.flatnonzero(m.sensor_type == mujoco.mjtSensor.mjSENS_RANGEFINDER)
     raw = d.sensordata[m.sensor_adr[ids]]
     sites = m.sensor_objid[ids]
     radius = physics.robot_radius
-    surface = np.where(raw < 0, np.inf, raw / UNIT - radius)
+    surface = np.where(raw < 0, np.inf, raw / physics.unit - radius)
     reading = encode_range(surface, sensor_range=sensor_range) / SENSOR_LEVELS
     start = d.site_xpos[sites]
     axis = d.site_xmat[sites][:, [2, 5, 8]]  # each site's z axis: its beam
-    length = np.where(surface <= sensor_range, raw, (radius + sensor_range) * UNIT)
+    length = np.where(surface <= sensor_range, raw, (radius + sensor_range) * physics.unit)
     return start, start + axis * length[:, None], reading
 
 
@@ -208,14 +207,13 @@ def frame(physics, path_xy=(), height=HEIGHT, width=WIDTH, camera="top", *, colo
     legend: (text, RGB) rows drawn at the bottom right."""
     import mujoco
 
-    from models import UNIT
-
     pts = np.asarray(path_xy, dtype=np.float64).reshape(-1, 2)
 
     def draw(physics, scene):
         for i in range(len(pts) - 1):
             rgba = PATH_RGBA if colours is None else (*colours[i], 1.0)
-            if _add_line(scene, (*pts[i] * UNIT, 0.01), (*pts[i + 1] * UNIT, 0.01), rgba,
+            unit = physics.unit
+            if _add_line(scene, (*pts[i] * unit, 0.01), (*pts[i + 1] * unit, 0.01), rgba,
                          PATH_WIDTH) is None:
                 break
         if sensor_range is not None:

@@ -47,7 +47,8 @@ class RunSpec:
     def label(self):
         """The robot's name in folders and tables: its registered name, or its file's stem;
         with ".<agent>" after it for a learner other than EBRL."""
-        name = self.robot if self.drive is None else pathlib.Path(self.robot).stem
+        name = (self.robot if self.drive is None and not self.robot.endswith(".toml")
+                else pathlib.Path(self.robot).stem)
         return name if self.agent == "ebrl" else f"{name}.{self.agent}"
 
     @property
