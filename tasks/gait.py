@@ -63,19 +63,6 @@ PARAMETERS = {
 LEGS = 4
 
 
-def check_file(mount, spec):
-    """The file's motors a gait mount names: 4 hips and 4 ankles on hinge joints."""
-    from tasks.mount import MountError, _by_name
-    roles = dict(mount.action[1:])
-    for role in [f"hip_{i}" for i in range(LEGS)] + [f"ankle_{i}" for i in range(LEGS)]:
-        name = roles.get(role)
-        if name is None:
-            raise MountError(f"{mount.path}: action.{role}: missing: the file's motor for it")
-        if _by_name(spec.actuators, name) is None:
-            raise MountError(f"{mount.path}: action.{role}: no actuator named {name!r} in "
-                             f"{mount.model}")
-
-
 class Physics(navigation.Physics):
     """A legged base on a free joint, its hips and ankles under the gait's PD loops."""
 

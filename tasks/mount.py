@@ -13,7 +13,7 @@ tasks.navigation reads, so a mounted model is as self-describing as a contract f
     name = "point"                      # default: the mount file's stem
     description = "..."
     file = "gymnasium:envs/mujoco/assets/point.xml"
-    drive = "two_wheel"                 # tasks.robots.DRIVES
+    drive = "two_wheel"                 # a key of ACTIONS (tasks.robots.DRIVES)
     unit = 0.3333333333333333           # metres per paper unit (default 0.1)
     base = "torso"                      # the body whose frame is the robot's pose
     joints = "file"                     # "file" (the base's own), "free", "planar"
@@ -165,14 +165,13 @@ def parse(path):
                     fail(where, f"unknown {x!r}; valid: {', '.join(valid)}")
         return tuple(v)
 
-    from tasks.robots import DRIVES
     table(data, _TOP, "")
     for key in ("file", "drive", "base"):
         if key not in data:
             fail(key, "missing (required)")
     drive = text(data, "drive", "drive")
-    if drive not in DRIVES:
-        fail("drive", f"unknown drive {drive!r}; valid: {', '.join(DRIVES)}")
+    if drive not in ACTIONS:
+        fail("drive", f"unknown drive {drive!r}; valid: {', '.join(ACTIONS)}")
     model = resolve_file(text(data, "file", "file"), "file", path)
     joints = data.get("joints", "file")
     if joints not in JOINTS:
@@ -282,19 +281,6 @@ def parse(path):
                  readings=tuple(sorted(readings.items())),
                  check=tuple(sorted((k, float(v)) for k, v in check.items())),
                  description=str(data.get("description", "")))
-
-
-def file_options(mount):
-    """The registry's timestep and integrator for the mount: its own fields, else the file's
-    <option> where keep_options names them, else the room's (None)."""
-    from tasks.robots import file_options as options
-    own = options(mount.model)
-    out = {k: own[k] for k in ("timestep", "integrator") if k in mount.keep_options and k in own}
-    if mount.timestep is not None:
-        out["timestep"] = mount.timestep
-    if mount.integrator is not None:
-        out["integrator"] = mount.integrator
-    return out
 
 
 def _fail(mount, field, message):
@@ -462,8 +448,7 @@ def robot_spec(mount):
             act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
             act.actrange, act.actlimited = [-1e6, 1e6], mujoco.mjtLimited.mjLIMITED_TRUE
     elif kind == "gait":
-        from tasks import gait
-        gait.check_file(mount, spec)
+        _check_gait(mount, spec)
         names.update((role, name) for role, name in mount.action[1:] if role != name)
 
     # -- options ------------------------------------------------------------------
@@ -556,16 +541,14 @@ def physics_class(mount):
     return two_wheel.WheelPhysics if kind == "wheels" else two_wheel.Physics
 
 
-def entry(mount):
-    """The registry entry (tasks.robots.Robot) of a mount."""
-    from tasks.robots import Robot
-    return Robot(mount.name, mount.model, mount.drive, unit=mount.unit,
-                 time_scale=mount.time_scale, readings=mount.readings,
-                 accuracy_limits=mount.check,
-                 description=mount.description or f"mounted from {mount.file}",
-                 mount=mount, **file_options(mount))
-
-
-def load(path):
-    """The registry entry of the mount file at `path`; MountError on a bad mount."""
-    return entry(parse(path))
+def _check_gait(mount, spec):
+    """The file's motors a gait mount names: 4 hips and 4 ankles (tasks.gait.LEGS)."""
+    from tasks.gait import LEGS
+    roles = dict(mount.action[1:])
+    for role in [f"hip_{i}" for i in range(LEGS)] + [f"ankle_{i}" for i in range(LEGS)]:
+        name = roles.get(role)
+        if name is None:
+            raise MountError(f"{mount.path}: action.{role}: missing: the file's motor for it")
+        if _by_name(spec.actuators, name) is None:
+            raise MountError(f"{mount.path}: action.{role}: no actuator named {name!r} in "
+                             f"{mount.model}")

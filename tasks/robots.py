@@ -161,12 +161,29 @@ MOUNTS = {p.stem: p for p in sorted(MOUNT_DIR.glob("*.toml"))}
 
 
 def _mounted(path):
-    """The entry of a mount file, parsed once per process and path."""
+    """The entry of a mount file (tasks.mount), parsed once per process and path;
+    MountError on a bad mount."""
     key = str(pathlib.Path(path).resolve())
     if key not in _MOUNTED:
         from tasks import mount
-        _MOUNTED[key] = mount.load(path)
+        m = mount.parse(path)
+        _MOUNTED[key] = Robot(m.name, m.model, m.drive, unit=m.unit, time_scale=m.time_scale,
+                              readings=m.readings, accuracy_limits=m.check,
+                              description=m.description or f"mounted from {m.file}",
+                              mount=m, **_mount_options(m))
     return _MOUNTED[key]
+
+
+def _mount_options(mount):
+    """The registry's timestep and integrator for a mount: its own fields, else the file's
+    <option> where keep_options names them, else the room's (None)."""
+    own = file_options(mount.model)
+    out = {k: own[k] for k in ("timestep", "integrator") if k in mount.keep_options and k in own}
+    if mount.timestep is not None:
+        out["timestep"] = mount.timestep
+    if mount.integrator is not None:
+        out["integrator"] = mount.integrator
+    return out
 
 
 _MOUNTED = {}
