@@ -294,7 +294,6 @@ def _by_name(items, name):
 def robot_spec(mount):
     """The robot file's MjSpec, edited as the mount says (the file itself is untouched)."""
     import mujoco
-    import numpy as np
 
     import models
     try:

@@ -14,7 +14,6 @@ import statistics
 import time
 
 import mujoco
-import numpy as np
 
 from ebrl.benchmark import reference_pass
 from experiments.running import protocol
