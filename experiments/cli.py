@@ -750,12 +750,11 @@ def cmd_fit(args):
     problem = fit.Problem(names=names, rungs=rungs, steps=args.steps)
     args.out.mkdir(parents=True, exist_ok=True)
     try:
-        s = study.load(args.study or fit.STUDY_NAME, url, args.out, args.sampler_seed)
+        s = study.load(args.study or fit.STUDY_NAME, url, args.out, args.sampler_seed,
+                       first={n: fit.default(n) for n in names})  # the defaults: trial 0
     except Exception as e:  # a storage that cannot be opened: one line
-        return _fail(f"cannot open the study storage {url}: {results.error_line(e)}")
+        return _fail(study.hide(f"cannot open the study storage {url}: {results.error_line(e)}", url))
     try:
-        if not s.get_trials(deepcopy=False):  # the defaults first, as trial 0
-            s.enqueue_trial({n: fit.default(n) for n in names})
         outcome = study.optimize(problem, s, args.out, args.trials, batch=args.batch,
                                  workers=args.workers, backend=args.backend,
                                  promote=args.promote, progress=not args.no_progress)
@@ -774,7 +773,7 @@ def cmd_fit(args):
             print(f"published: {fit.publish(s, args.out, names, args.results, args.figures)}")
     except results.ResultsError as e:
         return _fail(str(e))
-    print(f"{outcome.made} trials made now, {outcome.total} in the study ({url})")
+    print(f"{outcome.made} trials made now, {outcome.total} in the study ({study.shown(url)})")
     return _finish("fit", path, failed)
 
 
@@ -812,19 +811,17 @@ def cmd_evolve(args):
     name = args.study or evolve.study_name(label, not args.no_learning)
     args.out.mkdir(parents=True, exist_ok=True)
     try:
-        s = study.load(name, url, args.out, sampler=problem.sampler(0))
+        s = study.load(name, url, args.out, sampler=problem.sampler(0), first=problem.x0())
     except Exception as e:  # a storage that cannot be opened: one line
-        return _fail(f"cannot open the study storage {url}: {results.error_line(e)}")
+        return _fail(study.hide(f"cannot open the study storage {url}: {results.error_line(e)}", url))
     try:
         evolve.check_settings(s, problem)
     except ValueError as e:
         return _fail(str(e))
     made, failed = 0, []
     try:
-        if not s.get_trials(deepcopy=False):  # the starting genome first, alone
-            s.enqueue_trial(problem.x0())
-        # The starting genome alone (CMA-ES needs a complete trial to know the space), then
-        # one batch of --population trials per generation.
+        # The starting genome alone (enqueued by study.load; CMA-ES needs a complete trial
+        # to know the space), then one batch of --population trials per generation.
         for n_trials, batch in ((1, 1), (1 + args.population * args.generations, args.population)):
             outcome = study.optimize(problem, s, args.out, n_trials, batch=batch,
                                      workers=args.workers, backend=args.backend,
@@ -834,7 +831,7 @@ def cmd_evolve(args):
         path = evolve.write(s, args.out, problem)
     except results.ResultsError as e:
         return _fail(str(e))
-    print(f"{made} trials made now, {len(s.trials)} in the study {name} ({url})")
+    print(f"{made} trials made now, {len(s.trials)} in the study {name} ({study.shown(url)})")
     return _finish("evolve", path, failed)
 
 
