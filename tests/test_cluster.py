@@ -35,11 +35,10 @@ def finish(proc, timeout=300):
 
 
 def load(url, name):
-    import optuna
-
+    """The study as the workers open it (under their lock: a reader that made the tables
+    beside them would race them)."""
     from experiments.studies import study
-    optuna.logging.set_verbosity(optuna.logging.WARNING)
-    return optuna.load_study(study_name=name, storage=study.storage_url(url, "."))
+    return study.load(name, url, ".", create=False)
 
 
 def check_shared(s, n, out):
@@ -50,7 +49,8 @@ def check_shared(s, n, out):
     numbers = [t.number for t in trials]
     assert len(numbers) == len(set(numbers))
     complete = [t for t in trials if t.state == optuna.trial.TrialState.COMPLETE]
-    assert len(complete) == n
+    assert len(complete) == n, [(t.number, t.state.name, t.params, t.user_attrs.get("error"),
+                                 t.system_attrs.get("ebrl:worker")) for t in trials]
     assert not [t for t in trials if t.state in (optuna.trial.TrialState.RUNNING,
                                                  optuna.trial.TrialState.WAITING)]
     settings = [json.dumps(t.params, sort_keys=True) for t in complete]
@@ -69,3 +69,160 @@ def test_two_fit_workers_share_one_study_on_a_fresh_database(postgres_url, tmp_p
     assert sum(made) == 6 and all(made), (out_a, out_b)  # both worked, 6 trials in all
     complete = check_shared(load(postgres_url, "fit"), 6, out)
     assert complete[0].number == 0  # the defaults, enqueued once
+
+
+def claimant(url, name, procs):
+    """The process of procs that runs a trial of the study now (None: none does)."""
+    import optuna
+
+    from experiments.studies import study
+    try:
+        s = load(url, name)
+    except KeyError:  # the study not made yet
+        return None
+    pids = {t.system_attrs.get(study.WORKER, {}).get("pid") for t in s.get_trials(
+        deepcopy=False, states=(optuna.trial.TrialState.RUNNING,))}
+    return next((p for p in procs if p.pid in pids), None)
+
+
+def kill_mid_trial(procs, url, name, timeout=120):
+    """SIGKILLs (with its run workers) the first of procs seen running a trial of its own;
+    returns it."""
+    deadline = time.time() + timeout
+    while (proc := claimant(url, name, procs)) is None:
+        assert all(p.poll() is None for p in procs) and time.time() < deadline, \
+            "no trial ever ran"
+        time.sleep(0.1)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    return proc
+
+
+def interrupted(s, complete):
+    """The trials a kill interrupted: failed, marked so, their settings run again."""
+    import optuna
+
+    from experiments.studies import study
+    cut = [t for t in s.get_trials(deepcopy=False) if t.user_attrs.get("error") == study.INTERRUPTED]
+    assert cut and all(t.state == optuna.trial.TrialState.FAIL for t in cut)
+    again = {json.dumps(t.params, sort_keys=True) for t in complete}
+    assert all(json.dumps(t.params, sort_keys=True) in again for t in cut)
+    return cut
+
+
+def clean_values(problem, trials, out):
+    """{settings: value} of the trials' settings from one clean worker: a fresh SQLite
+    study run by the study runner, in a fresh folder."""
+    from experiments.studies import study
+    s = study.load("clean", None, out, sampler=None)
+    for t in trials:
+        s.enqueue_trial(t.params)
+    study.optimize(problem, s, out, len(trials), batch=2, workers=1, progress=False)
+    return {json.dumps(t.params, sort_keys=True): t.value for t in s.trials}
+
+
+def test_a_fit_worker_killed_mid_trial_is_resumed_while_the_other_carries_on(postgres_url,
+                                                                              tmp_path):
+    from experiments.studies import fit
+    out = tmp_path / "fit"
+    workers = [start(FIT, out, postgres_url), start(FIT, out, postgres_url)]
+    killed = kill_mid_trial(workers, postgres_url, "fit")
+    workers[workers.index(killed)] = start(FIT, out, postgres_url)  # the same command again
+    for w in workers:
+        finish(w)
+    s = load(postgres_url, "fit")
+    complete = check_shared(s, 6, out)
+    interrupted(s, complete)
+    problem = fit.Problem(names=("policy_threshold",), rungs=((0,),), steps=200)
+    want = clean_values(problem, complete, tmp_path / "clean")
+    assert {json.dumps(t.params, sort_keys=True): t.value for t in complete} == want
+
+
+def test_two_evolve_workers_keep_cma_generations_through_a_kill(postgres_url, tmp_path):
+    from experiments.studies import evolve
+    from tasks.robots import ROBOTS
+    out = tmp_path / "evolve"
+    name = "evolve-two_wheel"
+    workers = [start(EVOLVE, out, postgres_url), start(EVOLVE, out, postgres_url)]
+    killed = kill_mid_trial(workers, postgres_url, name)
+    workers[workers.index(killed)] = start(EVOLVE, out, postgres_url)
+    for w in workers:
+        finish(w)
+    s = load(postgres_url, name)
+    complete = check_shared(s, 5, out)
+    interrupted(s, complete)
+    # Generations stay generations: the starting genome alone, then two of 2 trials each,
+    # every trial of a generation sampled from the one before it (CMA-ES's own record).
+    by_generation = {}
+    for t in complete:
+        by_generation.setdefault(evolve.generation(t), []).append(t.number)
+    assert {g: len(v) for g, v in by_generation.items()} == {0: 1, 1: 2, 2: 2}, [
+        (t.number, t.state.name, t.user_attrs.get("error"), t.system_attrs.get("ebrl:worker"),
+         t.system_attrs.get("cma:generation"), t.datetime_start.time(), t.datetime_complete)
+        for t in s.get_trials(deepcopy=False)]
+    assert max(by_generation[1]) < min(by_generation[2])
+    start_genome = evolve.paper_genome(ROBOTS["two_wheel"])
+    problem = evolve.Problem("two_wheel", start_genome, ("bias",), (0,), 200, population=2)
+    first = next(t for t in complete if t.number == by_generation[0][0])
+    assert first.params == problem.x0()  # generation 0: the starting genome (maybe asked again)
+    want = clean_values(problem, complete, tmp_path / "clean")
+    assert {json.dumps(t.params, sort_keys=True): t.value for t in complete} == want
+    assert (out / f"{name}.md").exists()
+
+
+SECRET = "S3cret-pw"
+
+
+def with_password(url):
+    """The URL with a password (the test server trusts its socket: any is accepted)."""
+    return url.replace("postgresql://postgres@", f"postgresql://postgres:{SECRET}@")
+
+
+def test_no_password_in_any_output_of_a_study(postgres_url, tmp_path):
+    out = tmp_path / "fit"
+    url = with_password(postgres_url)
+    args = [a for a in FIT if a != "--no-progress"] + ["--trials", "2"]  # the progress bar too
+    proc = start(args, out, url)
+    stdout, stderr = finish(proc)
+    assert "postgres:***@" in stdout
+    s = load(postgres_url, "fit")
+    stored = json.dumps([[t.user_attrs, t.system_attrs] for t in s.trials] + [s.user_attrs,
+                                                                              s.system_attrs])
+    files = [p.read_bytes() for p in out.rglob("*") if p.is_file()]
+    for text in [stdout, stderr, stored] + files:
+        assert SECRET not in (text.decode(errors="replace") if isinstance(text, bytes) else text)
+    # A server that cannot be reached: one line, the password hidden.
+    bad = ebrl("fit", "--storage", f"postgresql://ebrl:{SECRET}@127.0.0.1:1/db", "--out",
+               tmp_path / "bad", "--no-progress")
+    assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1, bad.stderr
+    assert "cannot open the study storage postgresql+psycopg://ebrl:***@127.0.0.1:1/db" \
+        in bad.stderr and SECRET not in bad.stderr + bad.stdout
+
+
+def test_a_lost_database_is_one_line_and_the_same_command_resumes(postgres_url, postgres_server,
+                                                                   tmp_path):
+    import psycopg
+    out = tmp_path / "fit"
+    db = postgres_url.split("/")[-1].split("?")[0]
+    url = with_password(postgres_url)
+    proc = start(FIT, out, url)
+    deadline = time.time() + 120
+    while claimant(postgres_url, "fit", [proc]) is None:
+        assert proc.poll() is None and time.time() < deadline
+        time.sleep(0.1)
+    with psycopg.connect(host=str(postgres_server), user="postgres", dbname="postgres",
+                         autocommit=True) as c:  # the database goes away mid-trial
+        c.execute(f"ALTER DATABASE {db} ALLOW_CONNECTIONS false")
+        c.execute("SELECT pg_terminate_backend(pid) FROM pg_stat_activity WHERE datname = %s",
+                  (db,))
+    stdout, stderr = proc.communicate(timeout=120)
+    lines = stderr.strip().splitlines()
+    assert proc.returncode == 2 and len(lines) == 1, stderr
+    assert lines[0].startswith("ebrl: error: lost the study storage postgresql+psycopg://"
+                               "postgres:***@/") and "rerun the same command" in lines[0]
+    assert SECRET not in stdout + stderr
+    with psycopg.connect(host=str(postgres_server), user="postgres", dbname="postgres",
+                         autocommit=True) as c:
+        c.execute(f"ALTER DATABASE {db} ALLOW_CONNECTIONS true")
+    finish(start(FIT, out, url))  # the same command resumes
+    check_shared(load(postgres_url, "fit"), 6, out)

@@ -347,7 +347,7 @@ class Explainer:
 def _writer(path, fps=FPS, quality=7):
     """An MP4 writer to path (any name: the container is given, not guessed from it)."""
     import imageio.v2 as imageio
-    return imageio.get_writer(str(path), format="FFMPEG", fps=fps, codec="libx264",
+    return imageio.get_writer(str(path), format=".mp4", fps=fps, codec="libx264",
                               quality=quality, pixelformat="yuv420p", macro_block_size=16,
                               ffmpeg_log_level="error",
                               output_params=["-movflags", "+faststart", "-f", "mp4"])

@@ -44,7 +44,6 @@ hidden (shown()); keep it out of the command line with libpq's ~/.pgpass or PGPA
 """
 import contextlib
 import dataclasses
-import datetime
 import hashlib
 import json
 import os
@@ -217,11 +216,7 @@ def load(name, storage, out, seed=0, create=True, sampler=None, first=None):
     url = storage_url(storage, out)
     try:
         with _lock(url):  # two workers on a fresh database race to make its tables
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
-                rdb = optuna.storages.RDBStorage(
-                    url, heartbeat_interval=HEARTBEAT, grace_period=GRACE,
-                    engine_kwargs={"pool_pre_ping": True})
+            rdb = _rdb(url)
             if not create:
                 s = optuna.load_study(study_name=name, storage=rdb, sampler=sampler)
             else:
@@ -247,6 +242,25 @@ def tpe(seed, n_trials):
     return optuna.samplers.TPESampler(seed=(seed * 1_000_003 + n_trials) % 2**31,
                                       multivariate=True, constant_liar=True,
                                       n_startup_trials=20)
+
+
+def _rdb(url, tries=5):
+    """Optuna's storage at url, its tables made if missing, with heartbeats. Making the
+    tables is retried: a program that opens the storage without the lock (Optuna's own
+    tools) may make them at the same moment (a unique violation on PostgreSQL's catalog)."""
+    import optuna
+    import sqlalchemy.exc
+    for attempt in range(tries):
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+                return optuna.storages.RDBStorage(
+                    url, heartbeat_interval=HEARTBEAT, grace_period=GRACE,
+                    engine_kwargs={"pool_pre_ping": True})
+        except (sqlalchemy.exc.IntegrityError, sqlalchemy.exc.ProgrammingError):
+            if attempt + 1 == tries:
+                raise
+            time.sleep(0.2 * (attempt + 1))
 
 
 def _host():
@@ -276,10 +290,9 @@ def _dead(study, t, stale, host):
         return True
     if who and who.get("host") == host:
         return who.get("pid") != os.getpid() and not _alive(who.get("pid"))
-    if not who:  # asked by a worker that died before it said who it is (or an old one)
-        started = t.datetime_start or datetime.datetime.now()
-        return (datetime.datetime.now() - started).total_seconds() > GRACE
-    return False
+    # Unclaimed: its worker died between asking and claiming it under the lock (or it was
+    # asked by something else, an older version, say): no one runs it.
+    return not who
 
 
 def _rescue(study):
@@ -298,16 +311,20 @@ def _rescue(study):
     return len(dead)
 
 
-@contextlib.contextmanager
-def _heartbeats(study, trials):
-    """Records this worker and a heartbeat for each trial now, then every HEARTBEAT
-    seconds while the block runs."""
+def _claim(study, trials):
+    """Records this worker (host and process) and a first heartbeat for each trial."""
     rdb = getattr(study, "ebrl_rdb", None)
     me = {"host": _host(), "pid": os.getpid()}
     for t in trials:
         study._storage.set_trial_system_attr(t._trial_id, WORKER, me)
         if rdb is not None:
             rdb.record_heartbeat(t._trial_id)
+
+
+@contextlib.contextmanager
+def _heartbeats(study, trials):
+    """Records a heartbeat for each trial every HEARTBEAT seconds while the block runs."""
+    rdb = getattr(study, "ebrl_rdb", None)
     stop = threading.Event()
 
     def beat():
@@ -376,7 +393,9 @@ def _next_batch(problem, study, n_trials, batch):
                 study.sampler = study.ebrl_sampler(len(study.get_trials(deepcopy=False)))
         with warnings.catch_warnings():  # the heartbeats are this module's, not optimize's
             warnings.filterwarnings("ignore", "Heartbeat of storage", UserWarning)
-            return [study.ask(problem.distributions()) for _ in range(max(k, 0))]
+            trials = [study.ask(problem.distributions()) for _ in range(max(k, 0))]
+        _claim(study, trials)  # before the lock is let go: no one sees them unclaimed
+        return trials
 
 
 def optimize(problem, study, out, n_trials, *, batch=4, workers=None, backend="local",
