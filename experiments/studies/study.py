@@ -302,7 +302,7 @@ def _rescue(study):
     rdb = getattr(study, "ebrl_rdb", None)
     stale = set(rdb._get_stale_trial_ids(study._study_id)) if rdb is not None else set()
     host = _host()
-    running = study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.RUNNING,))
+    running = _now(study, (optuna.trial.TrialState.RUNNING,))
     dead = [t for t in running if _dead(study, t, stale, host)]
     for t in dead:
         study._storage.set_trial_user_attr(t._trial_id, "error", INTERRUPTED)
@@ -348,11 +348,20 @@ def _heartbeats(study, trials):
 INTERRUPTED = "interrupted; asked again"
 
 
-def _finished(study):
+def _now(study, states=None):
+    """The study's trials as the storage holds them now (not through Optuna's cache of
+    them, which another worker's trials can pass by), in the given states."""
+    rdb = getattr(study, "ebrl_rdb", None)
+    if rdb is None:
+        return study.get_trials(deepcopy=False, states=states)
+    return rdb.get_all_trials(study._study_id, deepcopy=False, states=states)
+
+
+def _finished(study, trials=None):
     """The trials that count towards n_trials: complete, or failed by their runs (not
     those a kill interrupted, whose settings were asked again)."""
     import optuna
-    return [t for t in study.get_trials(deepcopy=False)
+    return [t for t in (_now(study) if trials is None else trials)
             if t.state == optuna.trial.TrialState.COMPLETE or (
                 t.state == optuna.trial.TrialState.FAIL
                 and t.user_attrs.get("error") != INTERRUPTED)]
@@ -378,11 +387,11 @@ def _next_batch(problem, study, n_trials, batch):
     import optuna
     with _lock(study.ebrl_url):
         _rescue(study)
-        finished = len(_finished(study))
+        trials = _now(study)
+        finished = len(_finished(study, trials))
         if finished >= n_trials:
             return None
-        running = len(study.get_trials(deepcopy=False,
-                                       states=(optuna.trial.TrialState.RUNNING,)))
+        running = sum(t.state == optuna.trial.TrialState.RUNNING for t in trials)
         if hasattr(problem, "sampler"):  # a batch is a generation: asked whole, in turn
             k = 0 if running else ((n_trials - finished) % batch or batch)
             if k:
@@ -390,7 +399,7 @@ def _next_batch(problem, study, n_trials, batch):
         else:
             k = min(batch, n_trials - finished - running)
             if k > 0 and getattr(study, "ebrl_sampler", None) is not None:
-                study.sampler = study.ebrl_sampler(len(study.get_trials(deepcopy=False)))
+                study.sampler = study.ebrl_sampler(len(trials))
         with warnings.catch_warnings():  # the heartbeats are this module's, not optimize's
             warnings.filterwarnings("ignore", "Heartbeat of storage", UserWarning)
             trials = [study.ask(problem.distributions()) for _ in range(max(k, 0))]
