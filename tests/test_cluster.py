@@ -1,6 +1,7 @@
 """A study shared by several workers on a real PostgreSQL server (tests/conftest.py's
 throwaway cluster): two `ebrl fit` and two `ebrl evolve` processes on one study, one
-killed (SIGKILL) mid-trial and restarted, and no password in any output."""
+killed (SIGKILL) mid-trial and restarted, no password in any output, and a database lost
+mid-trial. Skipped, with the reason, where no server can be started (conftest.py)."""
 import json
 import os
 import pathlib
@@ -8,8 +9,6 @@ import signal
 import subprocess
 import sys
 import time
-
-import pytest
 
 from helpers import ROOT, ebrl
 
