@@ -201,7 +201,8 @@ def test_a_lost_database_is_one_line_and_the_same_command_resumes(postgres_url, 
     out = tmp_path / "fit"
     db = postgres_url.split("?")[0].rsplit("/", 1)[1]
     url = with_password(postgres_url)
-    proc = start(FIT, out, url)
+    args = [x if x != "6" else "4" for x in FIT]  # 4 trials
+    proc = start(args, out, url)
     deadline = time.time() + 120
     while claimant(postgres_url, "fit", [proc]) is None:
         assert proc.poll() is None and time.time() < deadline
@@ -220,5 +221,5 @@ def test_a_lost_database_is_one_line_and_the_same_command_resumes(postgres_url, 
     with psycopg.connect(host=str(postgres_server), user="postgres", dbname="postgres",
                          autocommit=True) as c:
         c.execute(f"ALTER DATABASE {db} ALLOW_CONNECTIONS true")
-    finish(start(FIT, out, url))  # the same command resumes
-    check_shared(load(postgres_url, "fit"), 6, out)
+    finish(start(args, out, url))  # the same command resumes
+    check_shared(load(postgres_url, "fit"), 4, out)
