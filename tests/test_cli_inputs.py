@@ -165,7 +165,7 @@ def _snapshot(folder):
 def _run(args, cwd):
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(
         [str(ROOT)] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]))
-    for name in ("EBRL_TEST_FAIL", "EBRL_TEST_CRASH", "EBRL_TEST_DISK_FULL"):
+    for name in ("EBRL_TEST_FAIL", "EBRL_TEST_CRASH", "EBRL_TEST_DISK_FULL", "EBRL_TEST_DISK_FULL_AT"):
         env.pop(name, None)
     before = _snapshot(cwd)
     started = time.perf_counter()

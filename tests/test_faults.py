@@ -355,3 +355,99 @@ def test_a_trial_whose_runs_failed_is_marked_failed_not_scored(tmp_path):
     proc = ebrl(*FIT[:2], "3", *FIT[3:], "--out", out, env=env())
     got = trials(out)
     assert got[2].state == optuna.trial.TrialState.COMPLETE and got[2].value is not None
+
+
+# -- every writer: a full disk is one line naming the folder, what was there kept --------
+def snapshot(folder):
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(pathlib.Path(folder).rglob("*"))
+            if p.is_file()}
+
+
+@pytest.fixture(scope="module")
+def reported(tmp_path_factory):
+    """A tiny run folder with its report, a RESULTS.md beside it and a study's FIT.md."""
+    root = tmp_path_factory.mktemp("reported")
+    out = root / "results"
+    ebrl("run", "--robot", "two_wheel", "--condition", "all", "--seeds", "0", "--steps",
+         "300", "--workers", "2", "--no-progress", "--out", out, env=env())
+    (root / "RESULTS.md").write_text("# R\n\nkept above\n")
+    ebrl("report", out, "--results", root / "RESULTS.md", "--figures", root / "figures",
+         env=env())
+    ebrl(*FIT[:2], "2", *FIT[3:], "--out", root / "fit", env=env())
+    return root
+
+
+def full_disk_line(status, err, folder):
+    lines = err.strip().splitlines()
+    assert status == 2 and len(lines) == 1 and "Traceback" not in err, err
+    assert "No space left on device" in lines[0] and f" in {folder}:" in lines[0], lines[0]
+    return lines[0]
+
+
+def test_a_full_disk_at_each_report_file_is_one_line_and_keeps_the_last(reported,
+                                                                        monkeypatch, capsys):
+    """`ebrl report --results` (in this process: the disk fills at each of its files in
+    turn, the figures, summary.json, REPORT.md, RESULTS.md): one line naming the folder,
+    every file as it was; freed, the same command finishes."""
+    from experiments import cli
+    from experiments.running import results
+    root = reported
+    before = snapshot(root)
+    args = ["report", str(root / "results"), "--results", str(root / "RESULTS.md"),
+            "--figures", str(root / "figures")]
+    for pattern, folder in (("traces_two_wheel.png", root / "results" / "figures"),
+                            ("summary.json", root / "results"),
+                            ("REPORT.md", root / "results"), ("RESULTS.md", root)):
+        monkeypatch.setenv(results.TEST_DISK_FULL_AT, pattern)
+        monkeypatch.setattr(results, "_full", False)
+        capsys.readouterr()
+        status = cli.main(args)
+        full_disk_line(status, capsys.readouterr().err, folder)
+        assert snapshot(root) == before and leftovers(root) == [], pattern
+    monkeypatch.delenv(results.TEST_DISK_FULL_AT)
+    monkeypatch.setattr(results, "_full", False)
+    assert cli.main(args) == 0 and snapshot(root) == before
+
+
+def test_a_full_disk_at_fit_md_is_one_line_and_the_same_command_finishes(reported, tmp_path):
+    import shutil
+    out = tmp_path / "fit"
+    shutil.copytree(reported / "fit", out)
+    (out / "FIT.md").write_text("an older FIT.md\n")
+    args = [*FIT[:2], "2", *FIT[3:], "--out", out]
+    proc = ebrl(*args, env=env(EBRL_TEST_DISK_FULL_AT="FIT.md"), check=False)
+    full_disk_line(proc.returncode, proc.stderr, out)
+    assert (out / "FIT.md").read_text() == "an older FIT.md\n" and leftovers(out) == []
+    proc = ebrl(*args, env=env())
+    assert "0 trials made now, 2 in the study" in proc.stdout
+    assert (out / "FIT.md").read_text() == (reported / "fit" / "FIT.md").read_text()
+
+
+def test_a_full_disk_at_evolve_md_is_one_line_and_keeps_the_last(reported, tmp_path):
+    out, figures = tmp_path / "EVOLVE.md", tmp_path / "figures"
+    (tmp_path / "none").mkdir()  # no studies, no evolved runs: their lines say so
+    args = ["evolve-report", "--evolve", tmp_path / "none", "--hand", reported / "results",
+            "--evolved", tmp_path / "none", "--out", out, "--figures", figures]
+    ebrl(*args, env=env())
+    before = out.read_bytes()
+    out.write_bytes(before + b"\nan older page\n")
+    proc = ebrl(*args, env=env(EBRL_TEST_DISK_FULL_AT="EVOLVE.md"), check=False)
+    full_disk_line(proc.returncode, proc.stderr, tmp_path)
+    assert out.read_bytes() == before + b"\nan older page\n" and leftovers(tmp_path) == []
+
+
+def test_a_full_disk_at_a_video_is_one_line_and_keeps_the_last(tmp_path):
+    from experiments.outputs import rendering
+    try:
+        rendering.ensure_backend()
+    except rendering.RenderingError as e:
+        pytest.skip(str(e))
+    video = tmp_path / "v.mp4"
+    video.write_bytes(b"an older video")
+    args = ["render", "--robot", "two_wheel", "--condition", "avoidance", "--seed", "0",
+            "--steps", "40", "--out", video]
+    proc = ebrl(*args, env=env(EBRL_TEST_DISK_FULL_AT="v.mp4"), check=False)
+    full_disk_line(proc.returncode, proc.stderr, tmp_path)
+    assert video.read_bytes() == b"an older video" and leftovers(tmp_path) == []
+    ebrl(*args, env=env())
+    assert video.stat().st_size > 1000

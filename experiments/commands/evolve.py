@@ -65,11 +65,10 @@ def _check(args):
 
 
 def _generations(args, s, problem):
-    """The starting genome alone (CMA-ES needs a complete trial to know the space), then one
-    batch of --population trials per generation: (trials made, failed (name, error))."""
+    """The starting genome alone (enqueued by study.load; CMA-ES needs a complete trial to
+    know the space), then one batch of --population trials per generation: (trials made,
+    failed (name, error))."""
     from experiments.studies import study
-    if not s.get_trials(deepcopy=False):  # the starting genome first, alone
-        s.enqueue_trial(problem.x0())
     made, failed = 0, []
     for n_trials, batch in ((1, 1), (1 + args.population * args.generations, args.population)):
         outcome = study.optimize(problem, s, args.out, n_trials, batch=batch,
@@ -91,9 +90,10 @@ def run(args):
     name = args.study or evolve.study_name(label, not args.no_learning)
     args.out.mkdir(parents=True, exist_ok=True)
     try:
-        s = study.load(name, url, args.out, sampler=problem.sampler(0))
+        s = study.load(name, url, args.out, sampler=problem.sampler(0), first=problem.x0())
     except Exception as e:  # a storage that cannot be opened: one line
-        return fail(f"cannot open the study storage {url}: {results.error_line(e)}")
+        return fail(study.hide(f"cannot open the study storage {url}: {results.error_line(e)}",
+                               url))
     try:
         evolve.check_settings(s, problem)
     except ValueError as e:
@@ -103,5 +103,5 @@ def run(args):
         path = evolve.write(s, args.out, problem)
     except results.ResultsError as e:
         return fail(str(e))
-    print(f"{made} trials made now, {len(s.trials)} in the study {name} ({url})")
+    print(f"{made} trials made now, {len(s.trials)} in the study {name} ({study.shown(url)})")
     return finish("evolve", path, failed)

@@ -87,11 +87,9 @@ def _validate(args, s, problem, names):
 
 
 def _search(args, s, problem, names):
-    """The study's trials (the defaults first), then --validate and the pages: (the
+    """The study's trials (the defaults first: study.load enqueued them), then --validate and the pages: (the
     optimize outcome, the study page's path, the failed (name, error))."""
     from experiments.studies import fit, study
-    if not s.get_trials(deepcopy=False):  # the defaults first, as trial 0
-        s.enqueue_trial({n: fit.default(n) for n in names})
     outcome = study.optimize(problem, s, args.out, args.trials, batch=args.batch,
                              workers=args.workers, backend=args.backend,
                              promote=args.promote, progress=not args.no_progress)
@@ -116,12 +114,14 @@ def run(args):
     problem = fit.Problem(names=names, rungs=rungs, steps=args.steps)
     args.out.mkdir(parents=True, exist_ok=True)
     try:
-        s = study.load(args.study or fit.STUDY_NAME, url, args.out, args.sampler_seed)
+        s = study.load(args.study or fit.STUDY_NAME, url, args.out, args.sampler_seed,
+                       first={n: fit.default(n) for n in names})  # the defaults: trial 0
     except Exception as e:  # a storage that cannot be opened: one line
-        return fail(f"cannot open the study storage {url}: {results.error_line(e)}")
+        return fail(study.hide(f"cannot open the study storage {url}: {results.error_line(e)}",
+                               url))
     try:
         outcome, path, failed = _search(args, s, problem, names)
     except (results.ResultsError, _NoTrial) as e:
         return fail(str(e))
-    print(f"{outcome.made} trials made now, {outcome.total} in the study ({url})")
+    print(f"{outcome.made} trials made now, {outcome.total} in the study ({study.shown(url)})")
     return finish("fit", path, failed)

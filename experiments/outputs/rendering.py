@@ -24,6 +24,7 @@ but that cannot make a context (EGL without a device, say) is only found out by 
 and a process cannot try another OpenGL platform after one has loaded.
 """
 import contextlib
+import errno
 import os
 import pathlib
 import subprocess
@@ -342,11 +343,47 @@ class Explainer:
 
 
 def _writer(path, fps=FPS, quality=7):
+    """An MP4 writer to path (any name: the container is given, not guessed from it)."""
     import imageio.v2 as imageio
-    return imageio.get_writer(str(path), fps=fps, codec="libx264", quality=quality,
-                              pixelformat="yuv420p", macro_block_size=16,
+    return imageio.get_writer(str(path), format=".mp4", fps=fps, codec="libx264",
+                              quality=quality, pixelformat="yuv420p", macro_block_size=16,
                               ffmpeg_log_level="error",
-                              output_params=["-movflags", "+faststart"])
+                              output_params=["-movflags", "+faststart", "-f", "mp4"])
+
+
+@contextlib.contextmanager
+def _video(path, fps=FPS, quality=7):
+    """A writer of the video at path through the one atomic write (results.atomic_file):
+    a full disk is results.WriteError naming the folder, an earlier video kept whole. An
+    encoder that stops on the disk's error (a broken pipe, imageio's RuntimeError) is
+    reported as the disk's."""
+    from experiments.running import results
+    with results.atomic_file(path) as tmp:
+        writer = _writer(tmp, fps, quality)
+        try:
+            yield writer
+            writer.close()
+        except (BrokenPipeError, RuntimeError) as e:
+            _close_quietly(writer)
+            raise OSError(errno.ENOSPC if _full(tmp) else errno.EIO,
+                          f"the video encoder stopped ({type(e).__name__})") from e
+        except BaseException:
+            _close_quietly(writer)
+            raise
+
+
+def _close_quietly(writer):
+    try:
+        writer.close()
+    except (OSError, RuntimeError):
+        pass
+
+
+def _full(path):
+    try:
+        return os.statvfs(pathlib.Path(path).parent).f_bavail == 0
+    except OSError:
+        return False
 
 
 def _every(spec, frames):
@@ -362,17 +399,13 @@ def record(spec, path, *, frames=600, fps=FPS, camera="top", beams=True, path_st
     from experiments.running import protocol
     explainer = Explainer(spec, every=_every(spec, frames), camera=camera, label=label,
                           beams=beams, path=path_style, caption=caption)
-    writer = _writer(path, fps, quality)
+    with _video(path, fps, quality) as writer:
+        def on_step(*args):
+            image = explainer.on_step(*args)
+            if image is not None:
+                writer.append_data(image)
 
-    def on_step(*args):
-        image = explainer.on_step(*args)
-        if image is not None:
-            writer.append_data(image)
-
-    try:
         result = protocol.execute(spec, on_step=on_step)
-    finally:
-        writer.close()
     result["decisions"] = explainer.decisions
     result["decider_names"] = explainer.names
     return result
@@ -399,17 +432,13 @@ def record_compare(specs, labels, path, *, frames=600, fps=FPS, camera="top", be
         explainer = Explainer(right, label=labels[1], **options)
         with contextlib.closing(imageio.get_reader(str(first))) as reader:
             frames_left = iter(reader)
-            writer = _writer(path, fps)
+            with _video(path, fps) as writer:
+                def on_step(*args):
+                    image = explainer.on_step(*args)
+                    if image is not None:
+                        writer.append_data(np.hstack([next(frames_left), image]))
 
-            def on_step(*args):
-                image = explainer.on_step(*args)
-                if image is not None:
-                    writer.append_data(np.hstack([next(frames_left), image]))
-
-            try:
                 result = protocol.execute(right, on_step=on_step)
-            finally:
-                writer.close()
         result["decisions"], result["decider_names"] = explainer.decisions, explainer.names
         results.append(result)
     return results

@@ -137,8 +137,11 @@ def claims_table(summary):
 def save(fig, path, dpi=90):
     """Lays out, writes and closes a figure; returns path."""
     fig.tight_layout()
-    fig.savefig(path, dpi=dpi)
-    pyplot().close(fig)
+    try:
+        with results.atomic_file(path) as tmp:
+            fig.savefig(tmp, dpi=dpi, format=pathlib.Path(path).suffix[1:] or "png")
+    finally:
+        pyplot().close(fig)
     return path
 
 
@@ -245,12 +248,11 @@ BEGIN, END = "<!-- ebrl report: generated, do not edit -->", "<!-- ebrl report: 
 def publish(root, results_md, figures_dir):
     """Regenerates the tables of results_md (between BEGIN and END, keeping the rest),
     copies the figures into figures_dir and summary.json beside results_md."""
-    import shutil
     root, results_md, figures_dir = map(pathlib.Path, (root, results_md, figures_dir))
     summary = json.loads((root / "summary.json").read_text())
     figures_dir.mkdir(parents=True, exist_ok=True)
     for png in sorted((root / "figures").glob("*.png")):
-        shutil.copyfile(png, figures_dir / png.name)
+        copy(png, figures_dir / png.name)
     rel = os.path.relpath(figures_dir, results_md.parent)
     block = [BEGIN, "", *failed_section(summary, "###"),
              "### Section 3.6, the paper against ours", "", comparison_table(summary), "",
@@ -264,6 +266,12 @@ def publish(root, results_md, figures_dir):
     replace_block(results_md, BEGIN, END, block)
     results.atomic_write(results_md.parent / "summary.json", results.dumps(summary))
     return results_md
+
+
+def copy(src, dst):
+    """Copies a file through the one atomic write (results.atomic_write)."""
+    results.atomic_write(dst, pathlib.Path(src).read_bytes())
+    return dst
 
 
 def replace_block(path, begin, end, block):

@@ -9,6 +9,7 @@ A run that raised has instead a run.json with status "failed": its parameters, t
 error in one line and the traceback (write_failure). It is never averaged, the
 report names it, and a rerun retries it.
 """
+import contextlib
 import csv
 import errno
 import io
@@ -43,43 +44,68 @@ def _umask():
 _UMASK = _umask()
 
 
-class WriteError(ResultsError):
+class WriteError(ResultsError, OSError):
     """A results folder that cannot take a write (full, read-only, gone): the message
-    names the folder; what is already on disk stays complete."""
+    names the folder; what is already on disk stays complete. An OSError too, so that a
+    command that does not catch it still ends in its one line (experiments.cli.main)."""
 
 
 #: Test only: EBRL_TEST_DISK_FULL=N makes the disk "fill up" in the driver after N run
 #: records: the next run.json write fails halfway with ENOSPC, and every write after it.
 TEST_DISK_FULL = "EBRL_TEST_DISK_FULL"
+#: Test only: EBRL_TEST_DISK_FULL_AT=PATTERN makes the disk "fill up" at the first file
+#: whose name matches the shell pattern (summary.json, *.png, FIT.md, *.mp4, ...): its
+#: write fails with ENOSPC after half of it is written, and every write after it.
+TEST_DISK_FULL_AT = "EBRL_TEST_DISK_FULL_AT"
 _records = 0  # run.json files this process wrote (for TEST_DISK_FULL)
+_full = False  # the disk "filled up" (TEST_DISK_FULL_AT)
 
 
 def _test_disk_full(path):
+    global _full
+    pattern = os.environ.get(TEST_DISK_FULL_AT)
+    if pattern:
+        import fnmatch
+        _full = _full or fnmatch.fnmatch(path.name, pattern)
+        return _full
     limit = os.environ.get(TEST_DISK_FULL)
     if not limit:
         return False
     return _records > int(limit) or (_records == int(limit) and path.name == "run.json")
 
 
-def atomic_write(path, data):
-    """Writes bytes or text to path through a temporary file and a rename, so that
-    path is either its old self or complete. A write that fails (a full disk, a folder
-    turned read-only) raises WriteError naming the folder, and leaves no temporary file."""
+def write_error(path, e):
+    """The WriteError of an OSError met writing path: one line naming the folder."""
+    what = errno.errorcode.get(getattr(e, "errno", None), "")
+    return WriteError(f"cannot write {path.name} in {path.parent}: "
+                      f"{getattr(e, 'strerror', None) or e}{f' ({what})' if what else ''}; "
+                      "what is on disk is kept: free space (or make it writable) and rerun "
+                      "the same command to finish")
+
+
+@contextlib.contextmanager
+def atomic_file(path):
+    """The one atomic write of every file a command writes (run records, summary.json,
+    REPORT.md, the figures, FIT.md, EVOLVE.md, RESULTS.md, videos): yields a temporary
+    path beside path to write; when the block ends, the file is synced and renamed over
+    path, so that path is either its old self or complete. A write that fails (a full
+    disk, a folder turned read-only or removed) raises WriteError naming the folder and
+    the error, and leaves no temporary file."""
     global _records
     path = pathlib.Path(path)
-    mode = "wb" if isinstance(data, bytes) else "w"
     tmp = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+        os.close(fd)
+        tmp = pathlib.Path(tmp)
         os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp makes 0600; results are for sharing
-        with os.fdopen(fd, mode) as f:
-            if _test_disk_full(path):
-                f.write(data[: len(data) // 2])
-                f.flush()
-                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
-            f.write(data)
-            f.flush()
+        yield tmp
+        if _test_disk_full(path):
+            with open(tmp, "r+b") as f:
+                f.truncate(os.path.getsize(tmp) // 2)
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        with open(tmp, "rb") as f:
             os.fsync(f.fileno())
         os.replace(tmp, path)
     except BaseException as e:
@@ -88,15 +114,18 @@ def atomic_write(path, data):
                 pathlib.Path(tmp).unlink(missing_ok=True)
             except OSError:
                 pass
-        if isinstance(e, OSError):
-            what = errno.errorcode.get(e.errno, "")
-            raise WriteError(f"cannot write {path.name} in {path.parent}: "
-                             f"{e.strerror or e}{f' ({what})' if what else ''}; what is on "
-                             "disk is kept: free space (or make it writable) and rerun the "
-                             "same command to finish") from e
+        if isinstance(e, OSError) and not isinstance(e, WriteError):
+            raise write_error(path, e) from e
         raise
     if path.name == "run.json":
         _records += 1
+
+
+def atomic_write(path, data):
+    """Writes bytes or text to path through atomic_file."""
+    with atomic_file(path) as tmp:
+        with open(tmp, "wb" if isinstance(data, bytes) else "w") as f:
+            f.write(data)
 
 
 def dumps(obj):

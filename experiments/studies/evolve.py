@@ -279,7 +279,12 @@ def best_genome(s, problem):
 
 def write(s, out, problem):
     """OUT/<study>_best.json (the best genome), OUT/<study>.md and OUT/<study>_fitness.png;
-    returns the .md's path."""
+    returns the .md's path (a storage that fails meanwhile: study.StorageError)."""
+    with study.storage_errors(s):
+        return _write(s, out, problem)
+
+
+def _write(s, out, problem):
     out = pathlib.Path(out)
     name = s.study_name
     trial, genome = best_genome(s, problem)
@@ -293,7 +298,7 @@ def write(s, out, problem):
     for g, n, b, m, so_far in fitness_rows(s):
         lines.append(f"| {g} | {n} | {b:.2f} | {m:.2f} | {so_far:.2f} |")
     if genome is not None:
-        genomes.save(genome, out / f"{name}_best.json")
+        results.atomic_write(out / f"{name}_best.json", genomes.dumps(genome))
         d = study.deepest(trial)
         start = genomes.to_dict(problem.start)
         lines += ["", f"Best: trial {trial.number} (generation {generation(trial)}), "

@@ -348,7 +348,13 @@ def _rungs(done):
 
 
 def write(s, out, names):
-    """FIT.md and fit_objective.png under out; returns FIT.md's path."""
+    """FIT.md and fit_objective.png under out; returns FIT.md's path (a storage that
+    fails meanwhile: study.StorageError)."""
+    with study.storage_errors(s):
+        return _write(s, out, names)
+
+
+def _write(s, out, names):
     out = pathlib.Path(out)
     best = study.best_trials(s, 1)
     lines = ["# `ebrl fit`: the readings against Section 3.6", "",
@@ -386,13 +392,12 @@ FIT_END = "<!-- ebrl fit: end -->"
 
 def publish(s, out, names, results_md, figures_dir):
     """RESULTS.md's Search block, and the objective figure beside its other figures."""
-    import shutil
     figures_dir = pathlib.Path(figures_dir)
     figures_dir.mkdir(parents=True, exist_ok=True)
     src = pathlib.Path(out) / "fit_objective.png"
     block = [FIT_BEGIN, "", tables(s, out, names), ""]
     if src.exists():
-        shutil.copyfile(src, figures_dir / "fit_objective.png")
+        report.copy(src, figures_dir / "fit_objective.png")
         rel = pathlib.Path(figures_dir).resolve().relative_to(pathlib.Path(results_md).resolve().parent)
         block += [f"![objective over trials]({rel / 'fit_objective.png'})", ""]
     report.replace_block(results_md, FIT_BEGIN, FIT_END, block + [FIT_END])

@@ -26,11 +26,33 @@ TPE sampler (`ebrl fit`). A spec's genome (RunSpec.behaviour) is part of its fol
 Resume: the same command continues the study. Trials left running by a kill or Ctrl-C are
 marked failed and their settings asked again first, so their finished runs are reused. A
 trial whose runs failed is marked failed (not scored) with the errors in its attributes.
+
+Several workers (the same command on several machines, one storage URL, PostgreSQL say)
+share a study. Each records who runs a trial (host and process) and a heartbeat every
+HEARTBEAT seconds while it runs; a trial left running is taken as dead, and asked again,
+when its process is gone from this machine, its heartbeat is older than GRACE seconds (a
+machine that died), or no worker claimed it (one killed between asking and claiming). The steps that must not interleave (making the storage's tables,
+the first trial, rescuing, asking a batch) run under one lock: a PostgreSQL advisory lock,
+or a file lock beside an SQLite file. A worker asks no more trials than the study lacks
+beside those the others run, and waits for theirs before it ends; a problem with its own
+sampler (`ebrl evolve`'s CMA-ES generations) has a batch asked only when no trial runs,
+so that a generation is asked whole, by one worker, from the trials before it.
+
+A storage that fails while a study runs (a lost database connection) is StorageError: one
+line, the finished trials kept, the same command resumes. A URL is shown with its password
+hidden (shown()); keep it out of the command line with libpq's ~/.pgpass or PGPASSWORD.
 """
+import contextlib
 import dataclasses
 import hashlib
 import json
+import os
 import pathlib
+import re
+import socket
+import threading
+import time
+import warnings
 
 from experiments.running import results, runner
 
@@ -61,47 +83,288 @@ def run_folder(out, spec):
 
 
 def storage_url(storage, out):
-    """--storage as an Optuna URL: a URL as it is; a plain path, an SQLite file."""
+    """--storage as an Optuna URL: a URL as it is, but postgresql:// (and postgres://)
+    through psycopg 3, the cluster extra's driver (postgresql+psycopg://; a URL naming its
+    driver, postgresql+psycopg2://, is kept); a plain path, an SQLite file."""
     storage = storage or str(pathlib.Path(out) / DEFAULT_STORAGE)
-    return storage if "://" in storage else f"sqlite:///{pathlib.Path(storage).resolve()}"
+    if "://" not in storage:
+        return f"sqlite:///{pathlib.Path(storage).resolve()}"
+    scheme, rest = storage.split("://", 1)
+    return f"postgresql+psycopg://{rest}" if scheme in ("postgresql", "postgres") else storage
 
 
-def load(name, storage, out, seed=0, create=True, sampler=None):
+def shown(url):
+    """A storage URL with its password hidden (***), as every line and file shows it."""
+    try:
+        import sqlalchemy.engine
+        return sqlalchemy.engine.make_url(url).render_as_string(hide_password=True)
+    except Exception:  # not a URL SQLAlchemy reads: hide what looks like user:password@
+        return re.sub(r"(://[^/@:]*:)[^@]*@", r"\1***@", str(url))
+
+
+def hide(text, url):
+    """text with the URL's password (as given, and %-encoded) replaced by ***."""
+    try:
+        import urllib.parse
+
+        import sqlalchemy.engine
+        password = sqlalchemy.engine.make_url(url).password
+    except Exception:
+        password = None
+    text = str(text).replace(str(url), shown(url))
+    if password:
+        for form in {password, urllib.parse.quote(password, safe=""),
+                     urllib.parse.quote_plus(password)}:
+            text = text.replace(form, "***")
+    return text
+
+
+class StorageError(results.ResultsError):
+    """The study's storage failed (a lost database connection, say): the message is one
+    line, the URL's password hidden; the finished trials are kept."""
+
+
+#: Seconds between a worker's heartbeats for its running trials, and the age of the last
+#: heartbeat after which another worker takes a running trial as dead (a lost machine).
+HEARTBEAT = 5
+GRACE = 60
+#: Seconds between looks at the study while other workers' trials run.
+POLL = 0.5
+#: The PostgreSQL advisory lock key of the studies' lock (any fixed 64-bit number).
+LOCK_KEY = 0x65627231  # "ebr1"
+WORKER = "ebrl:worker"  # the trial system attribute naming who runs it
+
+
+def _is_postgres(url):
+    return str(url).startswith(("postgresql", "postgres"))
+
+
+@contextlib.contextmanager
+def _lock(url):
+    """The studies' lock in this storage: a PostgreSQL advisory lock (released also when
+    the worker's connection dies), or a file lock beside an SQLite file; none otherwise."""
+    if _is_postgres(url):
+        import sqlalchemy
+        engine = _lock_engine(url)
+        with engine.connect() as c:
+            c.execute(sqlalchemy.text("SELECT pg_advisory_lock(:k)"), {"k": LOCK_KEY})
+            c.commit()
+            try:
+                yield
+            finally:
+                c.execute(sqlalchemy.text("SELECT pg_advisory_unlock(:k)"), {"k": LOCK_KEY})
+                c.commit()
+    elif str(url).startswith("sqlite:///"):
+        import fcntl
+        path = pathlib.Path(str(url)[len("sqlite:///"):].split("?")[0])
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(f"{path}.lock", "a") as f:
+            fcntl.flock(f, fcntl.LOCK_EX)
+            try:
+                yield
+            finally:
+                fcntl.flock(f, fcntl.LOCK_UN)
+    else:
+        yield
+
+
+_ENGINES = {}
+
+
+def _lock_engine(url):
+    if url not in _ENGINES:
+        import sqlalchemy
+        _ENGINES[url] = sqlalchemy.create_engine(url, poolclass=sqlalchemy.pool.NullPool)
+    return _ENGINES[url]
+
+
+def _storage_failures():
+    """The exception types of a storage that fails (SQLAlchemy's, Optuna's, the driver's)."""
+    import optuna
+    import sqlalchemy.exc
+    kinds = [sqlalchemy.exc.SQLAlchemyError, optuna.exceptions.StorageInternalError]
+    try:
+        import psycopg
+        kinds.append(psycopg.Error)
+    except ImportError:
+        pass
+    return tuple(kinds)
+
+
+@contextlib.contextmanager
+def storage_errors(study):
+    """A storage failure inside the block as StorageError (one line, password hidden)."""
+    try:
+        yield
+    except _storage_failures() as e:
+        url = getattr(study, "ebrl_url", "")
+        raise StorageError(hide(f"lost the study storage {shown(url)}: "
+                                f"{results.error_line(e)}; the finished trials are kept: "
+                                "rerun the same command to resume", url)) from None
+
+
+def load(name, storage, out, seed=0, create=True, sampler=None, first=None):
     """The study `name` in the storage (made when missing and create), minimising; with
-    the sampler given, else a seeded TPE sampler."""
+    the sampler given, else a seeded TPE sampler. `first`: the settings of the study's
+    first trial, enqueued when the study holds none (under the lock, so that two workers
+    starting together enqueue it once)."""
     import optuna
     optuna.logging.set_verbosity(optuna.logging.WARNING)
+    reseeded = sampler is None
     if sampler is None:
-        sampler = optuna.samplers.TPESampler(seed=seed, multivariate=True,
-                                             constant_liar=True, n_startup_trials=20)
+        sampler = tpe(seed, 0)
     url = storage_url(storage, out)
-    if not create:
-        return optuna.load_study(study_name=name, storage=url, sampler=sampler)
-    return optuna.create_study(study_name=name, storage=url, sampler=sampler,
-                               direction="minimize", load_if_exists=True)
+    try:
+        with _lock(url):  # two workers on a fresh database race to make its tables
+            rdb = _rdb(url)
+            if not create:
+                s = optuna.load_study(study_name=name, storage=rdb, sampler=sampler)
+            else:
+                s = optuna.create_study(study_name=name, storage=rdb, sampler=sampler,
+                                        direction="minimize", load_if_exists=True)
+            if first is not None and not s.get_trials(deepcopy=False):
+                s.enqueue_trial(first)
+    except ModuleNotFoundError as e:
+        if e.name in ("psycopg", "psycopg2"):
+            raise ModuleNotFoundError(f"no PostgreSQL driver ({e.name}): install the "
+                                      "cluster extra, pip install -e '.[cluster]'") from None
+        raise
+    s.ebrl_url, s.ebrl_rdb = url, rdb
+    s.ebrl_sampler = (lambda n: tpe(seed, n)) if reseeded else None
+    return s
+
+
+def tpe(seed, n_trials):
+    """The seeded TPE sampler of a batch that starts when the study holds n_trials: seeded
+    from both, so that two workers (whose batches start at other counts) never draw the
+    same settings, and one worker's study is the same on every run."""
+    import optuna
+    return optuna.samplers.TPESampler(seed=(seed * 1_000_003 + n_trials) % 2**31,
+                                      multivariate=True, constant_liar=True,
+                                      n_startup_trials=20)
+
+
+def _rdb(url, tries=5):
+    """Optuna's storage at url, its tables made if missing, with heartbeats. Making the
+    tables is retried: a program that opens the storage without the lock (Optuna's own
+    tools) may make them at the same moment (a unique violation on PostgreSQL's catalog)."""
+    import optuna
+    import sqlalchemy.exc
+    for attempt in range(tries):
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+                return optuna.storages.RDBStorage(
+                    url, heartbeat_interval=HEARTBEAT, grace_period=GRACE,
+                    engine_kwargs={"pool_pre_ping": True})
+        except (sqlalchemy.exc.IntegrityError, sqlalchemy.exc.ProgrammingError):
+            if attempt + 1 == tries:
+                raise
+            time.sleep(0.2 * (attempt + 1))
+
+
+def _host():
+    """This machine: its name and boot (a process id means something only on it)."""
+    try:
+        boot = pathlib.Path("/proc/sys/kernel/random/boot_id").read_text().strip()
+    except OSError:
+        boot = ""
+    return f"{socket.gethostname()}/{boot}"
+
+
+def _alive(pid):
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _dead(study, t, stale, host):
+    """Whether a running trial's worker is gone: its process gone from this machine, or
+    its heartbeat (or, without one, its start) older than GRACE seconds."""
+    who = t.system_attrs.get(WORKER)
+    if t._trial_id in stale:
+        return True
+    if who and who.get("host") == host:
+        return who.get("pid") != os.getpid() and not _alive(who.get("pid"))
+    # Unclaimed: its worker died between asking and claiming it under the lock (or it was
+    # asked by something else, an older version, say): no one runs it.
+    return not who
 
 
 def _rescue(study):
-    """Trials left running by a kill: failed, and their settings enqueued again."""
+    """Trials whose worker is gone (a kill, a lost machine): failed, and their settings
+    enqueued again. Call under the lock."""
     import optuna
-    running = study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.RUNNING,))
-    for t in running:
-        # Optuna has no public way to mark a trial it did not start in this process:
-        # its storage and trial id (private in Optuna's API) are the only handle.
+    rdb = getattr(study, "ebrl_rdb", None)
+    stale = set(rdb._get_stale_trial_ids(study._study_id)) if rdb is not None else set()
+    host = _host()
+    running = _now(study, (optuna.trial.TrialState.RUNNING,))
+    dead = [t for t in running if _dead(study, t, stale, host)]
+    for t in dead:
+        # Optuna has no public way to mark a trial another process started: its storage,
+        # study and trial ids and its stale-trial query (private in Optuna's API) are the
+        # only handle.
         study._storage.set_trial_user_attr(t._trial_id, "error", INTERRUPTED)
         study.tell(t.number, state=optuna.trial.TrialState.FAIL)
         study.enqueue_trial(t.params, skip_if_exists=False)
-    return len(running)
+    return len(dead)
+
+
+def _claim(study, trials):
+    """Records this worker (host and process) and a first heartbeat for each trial."""
+    rdb = getattr(study, "ebrl_rdb", None)
+    me = {"host": _host(), "pid": os.getpid()}
+    for t in trials:
+        study._storage.set_trial_system_attr(t._trial_id, WORKER, me)
+        if rdb is not None:
+            rdb.record_heartbeat(t._trial_id)
+
+
+@contextlib.contextmanager
+def _heartbeats(study, trials):
+    """Records a heartbeat for each trial every HEARTBEAT seconds while the block runs."""
+    rdb = getattr(study, "ebrl_rdb", None)
+    stop = threading.Event()
+
+    def beat():
+        while not stop.wait(HEARTBEAT):
+            for t in trials:
+                try:
+                    rdb.record_heartbeat(t._trial_id)
+                except Exception:  # a lost connection: the main thread's next call says so
+                    pass
+    thread = threading.Thread(target=beat, daemon=True) if rdb is not None else None
+    if thread is not None:
+        thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        if thread is not None:
+            thread.join()
 
 
 INTERRUPTED = "interrupted; asked again"
 
 
-def _finished(study):
+def _now(study, states=None):
+    """The study's trials as the storage holds them now (not through Optuna's cache of
+    them, which another worker's trials can pass by), in the given states."""
+    rdb = getattr(study, "ebrl_rdb", None)
+    if rdb is None:
+        return study.get_trials(deepcopy=False, states=states)
+    return rdb.get_all_trials(study._study_id, deepcopy=False, states=states)
+
+
+def _finished(study, trials=None):
     """The trials that count towards n_trials: complete, or failed by their runs (not
     those a kill interrupted, whose settings were asked again)."""
     import optuna
-    return [t for t in study.get_trials(deepcopy=False)
+    return [t for t in (_now(study) if trials is None else trials)
             if t.state == optuna.trial.TrialState.COMPLETE or (
                 t.state == optuna.trial.TrialState.FAIL
                 and t.user_attrs.get("error") != INTERRUPTED)]
@@ -119,77 +382,123 @@ def _promoted(value, study, share):
     return value <= cut
 
 
+def _next_batch(problem, study, n_trials, batch):
+    """Under the lock: rescues dead workers' trials, then asks this worker's next batch.
+    None when the study holds n_trials finished trials; [] when this worker must wait
+    (the rest of the study is being run by others, or, for a problem with its own
+    sampler, a generation is)."""
+    import optuna
+    with _lock(study.ebrl_url):
+        _rescue(study)
+        trials = _now(study)
+        finished = len(_finished(study, trials))
+        if finished >= n_trials:
+            return None
+        running = sum(t.state == optuna.trial.TrialState.RUNNING for t in trials)
+        if hasattr(problem, "sampler"):  # a batch is a generation: asked whole, in turn
+            k = 0 if running else ((n_trials - finished) % batch or batch)
+            if k:
+                study.sampler = problem.sampler(finished)
+        else:
+            k = min(batch, n_trials - finished - running)
+            if k > 0 and getattr(study, "ebrl_sampler", None) is not None:
+                study.sampler = study.ebrl_sampler(len(trials))
+        with warnings.catch_warnings():  # the heartbeats are this module's, not optimize's
+            warnings.filterwarnings("ignore", "Heartbeat of storage", UserWarning)
+            trials = [study.ask(problem.distributions()) for _ in range(max(k, 0))]
+        _claim(study, trials)  # before the lock is let go: no one sees them unclaimed
+        return trials
+
+
 def optimize(problem, study, out, n_trials, *, batch=4, workers=None, backend="local",
              promote=0.1, progress=True):
     """Runs trials until the study holds n_trials finished ones (complete, or failed by
-    their runs); returns an Outcome."""
-    import optuna
+    their runs), with any other workers on the same study; returns an Outcome. A storage
+    that fails is StorageError."""
     out = pathlib.Path(out)
-    _rescue(study)
-    where = lambda spec: run_folder(out, spec)  # noqa: E731
     made, failed = 0, []
     bar = None
-    if progress:
-        from tqdm import tqdm
-        done_before = len(_finished(study))
-        bar = tqdm(total=n_trials, initial=min(done_before, n_trials), unit="trial",
-                   dynamic_ncols=True, desc=f"study {study.study_name}")
-    try:
-        while len(_finished(study)) < n_trials:
-            k = min(batch, n_trials - len(_finished(study)))
-            if hasattr(problem, "sampler"):
-                study.sampler = problem.sampler(len(study.get_trials(deepcopy=False)))
-            trials = [study.ask(problem.distributions()) for _ in range(k)]
-            rung_values = {t.number: [] for t in trials}
-            alive = list(trials)
-            errors = {}
-            for depth, seeds in enumerate(problem.rungs):
-                if not alive:
+    with storage_errors(study):
+        if progress:
+            from tqdm import tqdm
+            done_before = len(_finished(study))
+            bar = tqdm(total=n_trials, initial=min(done_before, n_trials), unit="trial",
+                       dynamic_ncols=True, desc=f"study {study.study_name}")
+        try:
+            while True:
+                trials = _next_batch(problem, study, n_trials, batch)
+                if trials is None:
                     break
-                specs = {t.number: problem.specs(t.params, seeds) for t in alive}
-                all_specs = sorted({s for v in specs.values() for s in v}, key=lambda s: -s.steps)
-                ran = runner.run(all_specs, where, workers=workers, backend=backend,
-                                 progress=False)
-                bad = {s: e for s, e in ran.failed}
-                nxt = []
-                for t in alive:
-                    lost = [f"{s.name}: {bad[s]}" for s in specs[t.number] if s in bad]
-                    if lost:
-                        errors[t.number] = lost
-                        continue
-                    runs = {}
-                    for s in specs[t.number]:
-                        runs.update(results.load_runs(where(s), [s]))
-                    value, attrs = problem.score(t.params, runs)
-                    rung_values[t.number].append(dict(attrs, value=value, seeds=list(seeds)))
-                    if depth + 1 < len(problem.rungs) and _promoted(
-                            rung_values[t.number][0]["value"], study, promote):
-                        nxt.append(t)
-                alive = nxt
-            for t in trials:
-                if t.number in errors:
-                    t.set_user_attr("error", errors[t.number][0])
-                    t.set_user_attr("failed_runs", errors[t.number])
-                    study.tell(t, state=optuna.trial.TrialState.FAIL)
-                    failed.append((t.number, errors[t.number][0]))
-                else:
-                    rungs = rung_values[t.number]
-                    t.set_user_attr("rungs", rungs)
-                    t.set_user_attr("folders", sorted({run_folder(out, s).name for s in
-                                                       problem.specs(t.params, problem.rungs[0])}))
-                    study.tell(t, rungs[0]["value"])
-                made += 1
+                if not trials:
+                    time.sleep(POLL)
+                    if bar is not None:
+                        bar.n = min(len(_finished(study)), n_trials)
+                        bar.refresh()
+                    continue
+                with _heartbeats(study, trials):
+                    told = _run_batch(problem, study, out, trials, workers, backend, promote)
+                for number, error in told:
+                    made += 1
+                    if error is not None:
+                        failed.append((number, error))
                 if bar is not None:
-                    bar.update(1)
+                    bar.n = min(len(_finished(study)), n_trials)
                     best = best_trials(study, 1)
                     if best:
                         bar.set_postfix_str(f"best #{best[0].number}: {deepest(best[0])['value']:.3g} "
                                             f"on {len(deepest(best[0])['seeds'])} seeds"
                                             + (f", {len(failed)} failed" if failed else ""))
-    finally:
-        if bar is not None:
-            bar.close()
-    return Outcome(made, len(study.trials), failed)
+                    bar.refresh()
+        finally:
+            if bar is not None:
+                bar.close()
+        return Outcome(made, len(study.trials), failed)
+
+
+def _run_batch(problem, study, out, trials, workers, backend, promote):
+    """Runs a batch's trials (rung by rung) and tells them; [(number, first error or None)]."""
+    import optuna
+    where = lambda spec: run_folder(out, spec)  # noqa: E731
+    rung_values = {t.number: [] for t in trials}
+    alive = list(trials)
+    errors = {}
+    for depth, seeds in enumerate(problem.rungs):
+        if not alive:
+            break
+        specs = {t.number: problem.specs(t.params, seeds) for t in alive}
+        all_specs = sorted({s for v in specs.values() for s in v}, key=lambda s: -s.steps)
+        ran = runner.run(all_specs, where, workers=workers, backend=backend, progress=False)
+        bad = {s: e for s, e in ran.failed}
+        nxt = []
+        for t in alive:
+            lost = [f"{s.name}: {bad[s]}" for s in specs[t.number] if s in bad]
+            if lost:
+                errors[t.number] = lost
+                continue
+            runs = {}
+            for s in specs[t.number]:
+                runs.update(results.load_runs(where(s), [s]))
+            value, attrs = problem.score(t.params, runs)
+            rung_values[t.number].append(dict(attrs, value=value, seeds=list(seeds)))
+            if depth + 1 < len(problem.rungs) and _promoted(
+                    rung_values[t.number][0]["value"], study, promote):
+                nxt.append(t)
+        alive = nxt
+    told = []
+    for t in trials:
+        if t.number in errors:
+            t.set_user_attr("error", errors[t.number][0])
+            t.set_user_attr("failed_runs", errors[t.number])
+            study.tell(t, state=optuna.trial.TrialState.FAIL)
+            told.append((t.number, errors[t.number][0]))
+        else:
+            rungs = rung_values[t.number]
+            t.set_user_attr("rungs", rungs)
+            t.set_user_attr("folders", sorted({run_folder(out, s).name for s in
+                                               problem.specs(t.params, problem.rungs[0])}))
+            study.tell(t, rungs[0]["value"])
+            told.append((t.number, None))
+    return told
 
 
 def deepest(trial):
