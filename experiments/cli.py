@@ -163,6 +163,9 @@ def build_parser():
     r.add_argument("--behaviour", type=pathlib.Path, default=None, metavar="FILE",
                    help="an intrinsic behaviour genome (JSON, ebrl.behaviour), e.g. "
                         "behaviours/paper_eq8.json or one `ebrl evolve` saved")
+    r.add_argument("--first-trial", action="store_true",
+                   help="end each run at its first goal (or its budget): its first trial, "
+                        "bit for bit a full run's, in folders ROBOT.first_trial/")
     r.add_argument("--no-progress", action="store_true")
 
     rep = sub.add_parser("report", help="rebuild summary.json, REPORT.md and figures")
@@ -408,7 +411,8 @@ def _plan(args, overrides=()):
     from experiments.running import runner
     conditions = paper.CONDITIONS if args.condition == "all" else (args.condition,)
     return runner.plan(_selected_robots(args), conditions, args.seeds, args.steps, overrides,
-                       args.drive, getattr(args, "agent", "ebrl"))
+                       args.drive, getattr(args, "agent", "ebrl"),
+                       getattr(args, "first_trial", False))
 
 
 def cmd_robots(args):
