@@ -96,13 +96,26 @@ class RunSpec:
             "seed": self.seed,
             "steps": self.steps,
             "learner": self.agent,
-            "agent": dataclasses.asdict(self.agent_config()),
+            "agent": _recorded(dataclasses.asdict(self.agent_config())),
             "avoidance": entry.avoidance,
             "modalities": [list(m) for m in entry.modalities],
-            "task": dataclasses.asdict(task),
+            "task": _recorded(dataclasses.asdict(task)),
             "model_sha256": model_digest(entry, task),
         } | ({} if self.behaviour is None else {"behaviour": _genome_dict(self.behaviour)}) \
           | ({"first_trial": True} if self.first_trial else {})
+
+
+#: Readings added since PROTOCOL_VERSION 4, with their defaults (which compute what the
+#: code computed before them, bit for bit): a run's parameters name one only when it is
+#: set otherwise, so the runs on disk still match.
+UNRECORDED_DEFAULTS = {"random_demand": "gaussian", "blocked_move": "stop",
+                       "leftover_turn": "commanded"}
+
+
+def _recorded(fields):
+    """A config's fields as a run's parameters record them (UNRECORDED_DEFAULTS left out)."""
+    return {k: v for k, v in fields.items()
+            if not (k in UNRECORDED_DEFAULTS and v == UNRECORDED_DEFAULTS[k])}
 
 
 def _genome_dict(genome):
@@ -156,8 +169,8 @@ def make_agent(spec, env):
     config = spec.agent_config()
     # The fallback's own readings, where the learner's config has them (EBRL's does; the
     # baselines take fallback_for's defaults, which are EBRL's defaults).
-    switches = {k: getattr(config, k) for k in ("eq9_dead_zone", "random_in_avoidance")
-                if hasattr(config, k)}
+    switches = {k: getattr(config, k) for k in ("eq9_dead_zone", "random_in_avoidance",
+                                                 "random_demand") if hasattr(config, k)}
     if spec.behaviour is not None:
         switches.pop("eq9_dead_zone", None)  # the genome's hold decides
         fallback = ebrl.behaviour.fallback(spec.behaviour, spec.condition, **switches)
