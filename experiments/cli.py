@@ -257,12 +257,20 @@ def build_parser():
                         "same command continues a study")
     f.add_argument("--seeds", type=parse_seeds, default=[0, 1],
                    help="every trial's seeds (default: 0-1)")
-    f.add_argument("--promote-seeds", type=parse_seeds, default=list(range(6)),
-                   help="a promoted trial's seeds, including --seeds (default: 0-5)")
+    f.add_argument("--promote-seeds", type=parse_seeds, default=None,
+                   help="a promoted trial's seeds, including --seeds (default: 0-5; with "
+                        "--stage first-trial, --seeds)")
     f.add_argument("--promote", type=_argument(lambda t: validate.fraction(t, "--promote")),
                    default=0.1, help="the share of trials promoted (default: %(default)s)")
     f.add_argument("--batch", type=_up_to(64), default=4,
                    help="trials asked and run together (default: %(default)s)")
+    f.add_argument("--stage", type=_choice(("table", "first-trial")), default="table",  # fit.STAGES
+                   help="table: the readings against Section 3.6's table (default); "
+                        "first-trial: stage 1, one drive's physics and fallback readings "
+                        "against the paper's first-trial distributions (--robot; 64 or "
+                        "more --seeds), FIT_first_trial_DRIVE.md")
+    f.add_argument("--robot", type=_choice(("two_wheel", "floating")), default=None,
+                   help="--stage first-trial: the drive's robot to fit")
     f.add_argument("--space", default="all",
                    help="comma-separated readings to search (default: all; see FIT.md)")
     f.add_argument("--steps", type=_up_to(validate.MAX_STEPS), default=None,
@@ -716,6 +724,17 @@ def _storage_url(args):
 def _fit_args(args):
     """Every `ebrl fit` argument checked before any work: (space names, storage URL)."""
     from experiments.studies import fit
+    if args.stage == "first-trial":
+        from experiments.studies import first_trials
+        names, rungs = first_trials.check_args(args.robot, args.space, args.seeds,
+                                               args.promote_seeds, args.validate)
+        if args.trial is not None and args.validate is None:
+            raise ValueError("--trial chooses the trial --validate runs; give --validate too")
+        return (names, rungs), _study_storage(args)
+    if args.robot is not None:
+        raise ValueError("--robot is for --stage first-trial (the table's fit runs both robots)")
+    if args.promote_seeds is None:
+        args.promote_seeds = list(range(6))
     names = tuple(fit.BY_NAME) if args.space == "all" else \
         tuple(n.strip() for n in args.space.split(",") if n.strip())
     unknown = [n for n in names if n not in fit.BY_NAME]
@@ -749,6 +768,8 @@ def cmd_fit(args):
         return _fail(str(e))
     from experiments.studies import fit, study
     from experiments.running import results
+    if args.stage == "first-trial":
+        return _fit_first_trial(args, *names, url)
     rungs = (tuple(args.seeds),) if args.seeds == args.promote_seeds else \
         (tuple(args.seeds), tuple(args.promote_seeds))
     problem = fit.Problem(names=names, rungs=rungs, steps=args.steps)
@@ -777,6 +798,28 @@ def cmd_fit(args):
         if args.results is not None:
             print(f"published: {fit.publish(s, args.out, names, args.results, args.figures)}")
     except results.ResultsError as e:
+        return _fail(str(e))
+    print(f"{outcome.made} trials made now, {outcome.total} in the study ({url})")
+    return _finish("fit", path, failed)
+
+
+def _fit_first_trial(args, names, rungs, url):
+    """`ebrl fit --stage first-trial` after its checks (experiments.studies.first_trials)."""
+    from experiments.running import results
+    from experiments.studies import first_trials, study
+    problem = first_trials.Problem(args.robot, names, rungs, args.steps)
+    args.out.mkdir(parents=True, exist_ok=True)
+    url_name = args.study or f"first_trial_{args.robot}"
+    try:
+        s = study.load(url_name, url, args.out, args.sampler_seed)
+    except Exception as e:  # a storage that cannot be opened: one line
+        return _fail(f"cannot open the study storage {url}: {results.error_line(e)}")
+    try:
+        outcome, path, failed = first_trials.fit(
+            problem, s, args.out, args.trials, batch=args.batch, workers=args.workers,
+            backend=args.backend, promote=args.promote, progress=not args.no_progress,
+            validate_seeds=args.validate, trial=args.trial)
+    except (results.ResultsError, ValueError) as e:
         return _fail(str(e))
     print(f"{outcome.made} trials made now, {outcome.total} in the study ({url})")
     return _finish("fit", path, failed)
