@@ -150,6 +150,13 @@ def test_a_tiny_study_runs_resumes_and_reaches_the_runs(tmp_path):
     (["--trial", "3"], "give --validate too"),
     (["--storage", "not a url://"], "bad --storage"),
     (["--backend", "slurm"], "unknown 'slurm'"),
+    (["--stage", "first-trial", "--seeds", "0-63"], "--robot two_wheel or floating"),
+    (["--stage", "first-trial", "--robot", "two_wheel", "--seeds", "0-9"], "at least 64 seeds"),
+    (["--stage", "first-trial", "--robot", "floating", "--seeds", "0-63", "--space", "bump,episode"],
+     "unknown reading 'episode'"),
+    (["--stage", "first-trial", "--robot", "two_wheel", "--seeds", "0-63", "--validate", "60-99"],
+     "--validate seeds must be seeds the search never uses"),
+    (["--robot", "two_wheel"], "--robot is for --stage first-trial"),
 ])
 def test_bad_fit_arguments_are_one_line_and_write_nothing(tmp_path, args, message):
     out = tmp_path / "fit"
@@ -223,20 +230,3 @@ def test_a_first_trial_study_runs_and_validates(tmp_path):
     v = json.loads((out / "validation_first_trial_two_wheel.json").read_text())
     assert v["seeds"] == list(range(100, 110)) and v["rows"]["best"] == v["rows"]["defaults"]
     assert (out / "FIT_first_trial_two_wheel.md").exists()
-
-
-@pytest.mark.parametrize("args,message", [
-    (["--stage", "first-trial", "--seeds", "0-63"], "--robot two_wheel or floating"),
-    (["--stage", "first-trial", "--robot", "two_wheel", "--seeds", "0-9"], "at least 64 seeds"),
-    (["--stage", "first-trial", "--robot", "floating", "--seeds", "0-63", "--space", "bump,episode"],
-     "unknown reading 'episode'"),
-    (["--stage", "first-trial", "--robot", "two_wheel", "--seeds", "0-63", "--validate", "60-99"],
-     "--validate seeds must be seeds the search never uses"),
-    (["--robot", "two_wheel"], "--robot is for --stage first-trial"),
-])
-def test_bad_first_trial_arguments_are_one_line_and_write_nothing(tmp_path, args, message):
-    out = tmp_path / "fit"
-    proc = ebrl("fit", *args, "--out", out)
-    assert proc.returncode == 2
-    assert message in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
-    assert not out.exists()

@@ -39,22 +39,14 @@ ROBOTS = {"two_wheel": "two_wheel", "floating": "floating"}
 MIN_SEEDS = 64
 
 
-@dataclasses.dataclass(frozen=True)
-class Param:
-    name: str       # a field of ebrl.Config or tasks.TaskConfig
-    kind: str       # "choice" or "float"
-    values: tuple   # the choices, or (low, high)
-    what: str
-
-    def distribution(self):
-        import optuna
-        if self.kind == "choice":
-            return optuna.distributions.CategoricalDistribution(self.values)
-        return optuna.distributions.FloatDistribution(*self.values)
+def _param(name, kind, values, what):
+    """A reading of the space, as `ebrl fit`'s (fit.Param; its scope: the drive's alone)."""
+    from experiments.studies.fit import Param
+    return Param(name, kind, values, "drive", what)
 
 
 def _switch(name, what):
-    return Param(name, "choice", AGENT_READINGS[name], what)
+    return _param(name, "choice", AGENT_READINGS[name], what)
 
 
 _FALLBACK = (
@@ -66,19 +58,19 @@ _FALLBACK = (
 #: to the ablation's largest, as `ebrl fit`'s).
 SPACES = {
     "two_wheel": _FALLBACK + (
-        Param("blocked_move", "choice", BLOCKED_MOVES, "a blocked move stops at contact, or "
+        _param("blocked_move", "choice", BLOCKED_MOVES, "a blocked move stops at contact, or "
                                                        "is refused whole"),
-        Param("leftover_turn", "choice", LEFTOVER_TURNS, "the rest turns the commanded way, "
+        _param("leftover_turn", "choice", LEFTOVER_TURNS, "the rest turns the commanded way, "
                                                          "or away from the nearer side"),
-        Param("radius", "float", (1.0, 2.5), "the robot's radius, units"),
+        _param("radius", "float", (1.0, 2.5), "the robot's radius, units"),
     ),
     "floating": _FALLBACK + (
         _switch("eq9_dead_zone", "eq 9's 'not changed': kept, or zero"),
-        Param("bump", "choice", BUMPS, "the floating robot at a wall"),
-        Param("restitution", "float", (0.0, 1.0), "the share reflected (with bounce)"),
-        Param("wall_friction", "float", (0.0, 1.5), "the bumper's friction (with grip)"),
-        Param("action_noise", "float", (0.0, 0.5), "the floating drive's action noise"),
-        Param("radius", "float", (1.0, 2.5), "the robot's radius, units"),
+        _param("bump", "choice", BUMPS, "the floating robot at a wall"),
+        _param("restitution", "float", (0.0, 1.0), "the share reflected (with bounce)"),
+        _param("wall_friction", "float", (0.0, 1.5), "the bumper's friction (with grip)"),
+        _param("action_noise", "float", (0.0, 0.5), "the floating drive's action noise"),
+        _param("radius", "float", (1.0, 2.5), "the robot's radius, units"),
     ),
 }
 
