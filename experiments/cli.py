@@ -809,9 +809,9 @@ def _fit_first_trial(args, names, rungs, url):
     from experiments.studies import first_trials, study
     problem = first_trials.Problem(args.robot, names, rungs, args.steps)
     args.out.mkdir(parents=True, exist_ok=True)
-    url_name = args.study or f"first_trial_{args.robot}"
+    name = args.study or f"first_trial_{args.robot}"
     try:
-        s = study.load(url_name, url, args.out, args.sampler_seed)
+        s = study.load(name, url, args.out, args.sampler_seed)
     except Exception as e:  # a storage that cannot be opened: one line
         return _fail(f"cannot open the study storage {url}: {results.error_line(e)}")
     try:
