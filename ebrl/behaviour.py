@@ -197,7 +197,8 @@ def is_paper_rule(genome):
     return all(getattr(genome, f) == getattr(ref, f) for f in genome.shape_fields())
 
 
-def fallback(genome, condition, random_in_avoidance=READINGS["random_in_avoidance"][0]):
+def fallback(genome, condition, random_in_avoidance=READINGS["random_in_avoidance"][0],
+             random_demand=READINGS["random_demand"][0]):
     """The fallback of Section 3.6's condition with this genome: "random", the random
     walk at the genome's spread; "avoidance", its behaviour with the random action at
     its share (ebrl.intrinsic.Intrinsic). At the paper's rule the fallback is
@@ -207,13 +208,15 @@ def fallback(genome, condition, random_in_avoidance=READINGS["random_in_avoidanc
         return intrinsic.fallback_for(genome.behaviour, condition, genome.random_rate,
                                       genome.random_sd,
                                       eq9_dead_zone="keep" if hold == 1.0 else "zero",
-                                      random_in_avoidance=random_in_avoidance)
+                                      random_in_avoidance=random_in_avoidance,
+                                      random_demand=random_demand)
     if condition != "avoidance":
         raise ValueError(f"unknown condition {condition!r}; valid: "
                          f"{', '.join(intrinsic.CONDITIONS)}")
     dim = intrinsic.BEHAVIOURS[genome.behaviour][1]
     return intrinsic.Intrinsic(genome.avoid, dim, genome.random_rate, genome.random_sd,
-                               random_in_avoidance=random_in_avoidance, hold=hold != 0.0)
+                               random_in_avoidance=random_in_avoidance, hold=hold != 0.0,
+                               uniform=random_demand == "uniform_all")
 
 
 def config_fields(genome):

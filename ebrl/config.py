@@ -28,6 +28,12 @@ READINGS = {
     # 3.4: with probability intrinsic_random_rate the random action replaces the
     # avoidance action, or is added to it (the sum clipped to [-1, 1]).
     "random_in_avoidance": ("replace", "add"),
+    # 3.4 / 3.3: a random action's demand is Section 3.4's Gaussian (mean 0, sd random_sd,
+    # clipped) for every random action; or uniform over Section 3.3's demand range
+    # (-1, 1) for the random walk (the condition without avoidance) only; or uniform for
+    # every random action (the walk's and the avoidance condition's 20%). The exploration
+    # action is the fallback's, so it follows.
+    "random_demand": ("gaussian", "uniform_walk", "uniform_all"),
 }
 
 
@@ -70,6 +76,7 @@ class Config:
     forgetting: str = READINGS["forgetting"][0]
     eq9_dead_zone: str = READINGS["eq9_dead_zone"][0]  # the fallback's (intrinsic.fallback_for)
     random_in_avoidance: str = READINGS["random_in_avoidance"][0]  # likewise
+    random_demand: str = READINGS["random_demand"][0]  # likewise
 
     def __post_init__(self):
         for name in ("memory_size", "recall_size"):

@@ -4,10 +4,13 @@ Inputs are the range codes (0..255) scaled to [0, 1], the "ranges". A fallback b
 callable fallback(ranges, rng) -> action array; one with a reset() method is reset
 by the agent when a trial ends.
 
-Two readings are switches (ebrl.config.READINGS), passed to fallback_for:
+Three readings are switches (ebrl.config.READINGS), passed to fallback_for:
 eq9_dead_zone ("zero": eq 9's "not changed" is zero acceleration; "keep": the
-fallback's previous acceleration on that axis) and random_in_avoidance ("replace":
-the random action replaces the avoidance action; "add": it is added to it, clipped).
+fallback's previous acceleration on that axis), random_in_avoidance ("replace":
+the random action replaces the avoidance action; "add": it is added to it, clipped)
+and random_demand ("gaussian": every random action Section 3.4's Gaussian;
+"uniform_walk": the random walk's uniform over (-1, 1); "uniform_all": every random
+action's).
 """
 import ctypes.util
 
@@ -161,13 +164,15 @@ class FallbackStateType(types.StructRef):
 
 class FallbackRecord(structref.StructRefProxy):
     """A fallback (RandomWalk or Intrinsic) as the record fallback_step works on: its
-    kind (WALK, TURNING, ACCELERATING, GIVEN), random share and spread, the
+    kind (WALK, TURNING, ACCELERATING, GIVEN), random share and spread, whether its
+    random action is uniform over (-1, 1) instead (random_demand), the
     random_in_avoidance reading (add), eq 9's theta, the held action (`last`, empty
     without hold), scratch for the random action, who chose its last action (RANDOM or
     INTRINSIC, -1 before any), and the random stream its Python calls draw from."""
 
 
-FALLBACK_FIELDS = ("kind", "rate", "sd", "add", "theta", "last", "random", "choice", "rng")
+FALLBACK_FIELDS = ("kind", "rate", "sd", "uniform", "add", "theta", "last", "random", "choice",
+                   "rng")
 structref.define_proxy(FallbackRecord, FallbackStateType, list(FALLBACK_FIELDS))
 
 
@@ -178,23 +183,30 @@ def choice_of(f):
 
 
 @njit(cache=True)
+def random_demand(f, rng, out):
+    """A random action's draws into out, one per part: Gaussian (mean 0, sd f.sd; the
+    caller clips), or with f.uniform uniform over (-1, 1) (-1 + 2 u, u = rng.random()'s
+    double: Generator.uniform(-1, 1)'s formula)."""
+    for i in range(out.shape[0]):
+        out[i] = rng.uniform(-1.0, 1.0) if f.uniform else rng.normal(0.0, f.sd)
+
+
+@njit(cache=True)
 def fallback_step(f, ranges, rng, out):
     """The fallback's action into out, its draws from rng in their order: the random
-    walk's Gaussians (WALK); or Intrinsic's uniform draw, then the random action's
-    Gaussians when it is below the rate, then fallback_act (a GIVEN avoidance is in out
-    already). Returns, and keeps as f.choice, RANDOM or INTRINSIC."""
+    walk's draws (WALK, random_demand); or Intrinsic's uniform draw, then the random
+    action's draws when it is below the rate, then fallback_act (a GIVEN avoidance is
+    in out already). Returns, and keeps as f.choice, RANDOM or INTRINSIC."""
     dim = out.shape[0]
     if f.kind == WALK:
-        for i in range(dim):
-            out[i] = rng.normal(0.0, f.sd)
+        random_demand(f, rng, out)
         clip_unit(out)
         f.choice = RANDOM
         return RANDOM
     random = f.random[:0]
     if rng.random() < f.rate:
         random = f.random[:dim]
-        for i in range(dim):
-            random[i] = rng.normal(0.0, f.sd)
+        random_demand(f, rng, random)
     chose = fallback_act(f.kind, ranges, random, f.add, f.theta, f.last, out)
     f.choice = RANDOM if chose else INTRINSIC
     return f.choice
@@ -221,8 +233,8 @@ class _Fallback:
     _kind = WALK
     _choices = (None, "intrinsic", "random")
 
-    def _record(self, rate, sd, add, last):
-        self._args = (self._kind, float(rate), float(sd), bool(add), THETA,
+    def _record(self, rate, sd, add, last, uniform=False):
+        self._args = (self._kind, float(rate), float(sd), bool(uniform), bool(add), THETA,
                       _NOTHING if last is None else last, np.zeros(self.action_dim), -1)
         self.bind(np.random.default_rng(0))
 
@@ -252,13 +264,15 @@ class _Fallback:
 
 
 class RandomWalk(_Fallback):
-    """The paper's condition without avoidance: the random action every time."""
+    """The paper's condition without avoidance: the random action every time; with
+    uniform=True uniform over (-1, 1) (random_demand "uniform_walk", "uniform_all")
+    instead of Gaussian of sd `sd`."""
 
     compiled = True
 
-    def __init__(self, action_dim, sd=0.5):
-        self.action_dim, self.sd = action_dim, sd
-        self._record(0.0, sd, False, None)
+    def __init__(self, action_dim, sd=0.5, *, uniform=False):
+        self.action_dim, self.sd, self.uniform = action_dim, sd, uniform
+        self._record(0.0, sd, False, None, uniform)
 
     @property
     def choice(self):
@@ -288,14 +302,15 @@ class Intrinsic(_Fallback):
     """
 
     def __init__(self, avoid, action_dim, random_rate=0.2, sd=0.5, *,
-                 random_in_avoidance="replace", hold=False):
+                 random_in_avoidance="replace", hold=False, uniform=False):
         self.avoid, self.action_dim = avoid, action_dim
         self.random_rate, self.sd = random_rate, sd
         self.random_in_avoidance = check_reading("random_in_avoidance", random_in_avoidance)
         self.last = np.zeros(action_dim) if hold else None  # eq 9's "not changed"
         self._kind = {avoid_by_turning: TURNING,
                       avoid_by_accelerating: ACCELERATING}.get(avoid, GIVEN)
-        self._record(random_rate, sd, random_in_avoidance == "add", self.last)
+        self.uniform = uniform  # the random action uniform over (-1, 1) ("uniform_all")
+        self._record(random_rate, sd, random_in_avoidance == "add", self.last, uniform)
 
     @property
     def compiled(self):
@@ -327,23 +342,29 @@ DEAD_ZONE = ("eq9-10",)
 
 def fallback_for(behaviour, condition, random_rate=0.2, sd=0.5, *,
                  eq9_dead_zone=READINGS["eq9_dead_zone"][0],
-                 random_in_avoidance=READINGS["random_in_avoidance"][0]):
+                 random_in_avoidance=READINGS["random_in_avoidance"][0],
+                 random_demand=READINGS["random_demand"][0]):
     """The fallback of Section 3.6's condition ("random": the random walk only,
     "avoidance": the intrinsic behaviour `behaviour`, a key of BEHAVIOURS, with the
     random action at random_rate), acting in the behaviour's action dimension.
 
     eq9_dead_zone and random_in_avoidance are the Config switches of those names (see
     Intrinsic); they change the avoidance condition only, and eq9_dead_zone only eq
-    9-10 (eq 8 has no dead zone). Defaults: the readings of docs/interpretation.md."""
+    9-10 (eq 8 has no dead zone). random_demand: "gaussian" (Section 3.4's, sd `sd`,
+    for every random action), "uniform_walk" (the random walk uniform over (-1, 1), the
+    avoidance condition's random action Gaussian), "uniform_all" (both uniform).
+    Defaults: the readings of docs/interpretation.md."""
     check_reading("eq9_dead_zone", eq9_dead_zone)
     check_reading("random_in_avoidance", random_in_avoidance)
+    check_reading("random_demand", random_demand)
     if behaviour not in BEHAVIOURS:
         raise ValueError(f"unknown intrinsic behaviour {behaviour!r}; valid: "
                          f"{', '.join(BEHAVIOURS)}")
     avoid, dim = BEHAVIOURS[behaviour]
     if condition == "random":
-        return RandomWalk(dim, sd)
+        return RandomWalk(dim, sd, uniform=random_demand != "gaussian")
     if condition == "avoidance":
         return Intrinsic(avoid, dim, random_rate, sd, random_in_avoidance=random_in_avoidance,
-                         hold=eq9_dead_zone == "keep" and behaviour in DEAD_ZONE)
+                         hold=eq9_dead_zone == "keep" and behaviour in DEAD_ZONE,
+                         uniform=random_demand == "uniform_all")
     raise ValueError(f"unknown condition {condition!r}; valid: {', '.join(CONDITIONS)}")

@@ -35,3 +35,12 @@ RESULTS = {
 #: Two-wheel goals at 30,000 steps: "less than 30 in 43 cases out of 50 cases
 #: without avoidance, though the number is 49 in the worst case with avoidance".
 TWO_WHEEL_GOALS = {"random_below_30": 43, "avoidance_min": 49}
+
+#: Section 3.6's first trials, which are the physics and the fallback alone (before the
+#: first reward every utility is 0, so eq 5's min(W, U) never exceeds the threshold and
+#: memory never acts): per (drive, condition) the mean and sd of the first trial's steps
+#: over the runs that reached the goal within the budget (the drive's: 30,000 and
+#: 100,000), the runs (SEEDS) and how many of them reached it ("over 49 cases"; footnote
+#: 2: "in one of 50 cases, it could not reach at the goal within 30,000 steps").
+FIRST_TRIALS = {key: dict(figures["first_trial_steps"], runs=SEEDS)
+                for key, figures in RESULTS.items()}

@@ -12,6 +12,12 @@ THRUSTS = ("scaled", "demand", "clipped")
 #: The floating drive's velocity sensing: as measured, or through a 0-255 code like the
 #: rangefinders' (docs/interpretation.md, "Velocity sensing").
 VELOCITY_CODES = ("none", "code")
+#: The two-wheel drive's blocked move (docs/interpretation.md, "Blocked move"): "stop" at
+#: contact and turn the rest, or "refuse" the move whole (undone) and turn all of it.
+BLOCKED_MOVES = ("stop", "refuse")
+#: Which way a blocked move's rest turns: the commanded turn's ("commanded", right when
+#: a = 0), or "away" from the side whose beams read nearer at the blocked pose.
+LEFTOVER_TURNS = ("commanded", "away")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -48,6 +54,12 @@ class TaskConfig:
     #: +-VELOCITY_FULL_SCALE, decoded back to units/step).
     velocity_noise: float = 0.0
     velocity_code: str = VELOCITY_CODES[0]
+    #: The two-wheel drive when a collision stops a move (Section 3.3: "if the agent
+    #: cannot move any more because of collision with an object, the rest portion of move
+    #: is transferred into the angle of turn"): BLOCKED_MOVES, LEFTOVER_TURNS above.
+    #: Floating robots ignore them.
+    blocked_move: str = BLOCKED_MOVES[0]
+    leftover_turn: str = LEFTOVER_TURNS[0]
 
     def __post_init__(self):
         for name in ("sensor_range", "sensor_noise", "action_noise", "start_jitter_xy",
@@ -68,6 +80,7 @@ class TaskConfig:
             raise ValueError(f"start_jitter must be true or false, got {self.start_jitter!r}")
         if self.restitution > 1:
             raise ValueError(f"restitution must be at most 1, got {self.restitution!r}")
-        for name, valid in (("bump", BUMPS), ("thrust", THRUSTS), ("velocity_code", VELOCITY_CODES)):
+        for name, valid in (("bump", BUMPS), ("thrust", THRUSTS), ("velocity_code", VELOCITY_CODES),
+                            ("blocked_move", BLOCKED_MOVES), ("leftover_turn", LEFTOVER_TURNS)):
             if getattr(self, name) not in valid:
                 raise ValueError(f"{name} must be one of {', '.join(valid)}, got {getattr(self, name)!r}")

@@ -243,6 +243,12 @@ THRUST_SCALED, THRUST_DEMAND, THRUST_CLIPPED = range(3)  # tasks.config.THRUSTS,
 BUMP_PHYSICS, BUMP_STOP, BUMP_BOUNCE = range(3)
 #: The drives a Drive record serves (its `kind`).
 TWO_WHEEL, FLOATING = range(2)
+#: The two-wheel blocked-move readings (tasks.config.BLOCKED_MOVES, LEFTOVER_TURNS, in
+#: order): a blocked move stops at contact and its rest is turned (STOP), or is refused
+#: whole, undone, and all of it turned (REFUSE); the rest turns the commanded turn's
+#: way (COMMANDED) or away from the side whose beams read nearer (AWAY).
+BLOCKED_STOP, BLOCKED_REFUSE = range(2)
+LEFTOVER_COMMANDED, LEFTOVER_AWAY = range(2)
 
 
 @structref.register
@@ -261,10 +267,11 @@ class Drive(structref.StructRefProxy):
 #: disable flags and the bad-acceleration warning count (int32 views), MuJoCo's own
 #: arrays, the base body's rows of xpos and xmat, scratch for mj_objectVelocity; the
 #: contact count and the contact array (contact_views) with scratch for the bump
-#: readings' coast; the two-wheel step's plan (move, turn sign, x, y, cos, sin).
+#: readings' coast (and the two-wheel state a refused move returns to: qpos0, qvel0,
+#: act_saved); the two-wheel step's plan (move, turn sign, x, y, cos, sin).
 HANDLES = ("m", "d", "flags", "bad_qacc", "ctrl", "qpos", "qvel", "act", "sensordata",
            "xpos", "xmat", "velocity6", "ncon", "contact_f", "contact_i", "layout", "qpos0",
-           "qvel0", "normal", "plan")
+           "qvel0", "act_saved", "normal", "plan")
 #: The settings, by name, with what each is (ints first, then floats).
 SETTINGS = {
     "kind": "TWO_WHEEL or FLOATING",
@@ -290,6 +297,8 @@ SETTINGS = {
     "wheel_q1": "wheels: the right wheel hinge's qpos address",
     "ramp_first": "wheels: substeps of the first phase's ramp (WheelPhysics.RAMP)",
     "ramp_rest": "wheels: substeps of the rest's ramp",
+    "blocked_move": "two-wheel: BLOCKED_STOP or BLOCKED_REFUSE (tasks.config.BLOCKED_MOVES)",
+    "leftover_turn": "two-wheel: LEFTOVER_COMMANDED or LEFTOVER_AWAY (LEFTOVER_TURNS)",
     # floats
     "unit": "metres per paper unit",
     "timestep": "the model's timestep, s",
@@ -426,6 +435,10 @@ def two_wheel_turn(s, a, u):
     turn = -a * s.gain0 * noise_turn  # counter-clockwise positive
     move = s.gain1 * (1.0 - abs(a)) * noise_move
     status = two_wheel_phase(s, True, turn, s.n_first, s.ramp_first)
+    if s.blocked_move == BLOCKED_REFUSE:  # the state a refused move returns to
+        s.qpos0[:] = s.qpos
+        s.qvel0[:] = s.qvel
+        s.act_saved[:] = s.act
     x, y, heading = base_pose(s)
     plan = s.plan
     plan[0] = move
@@ -435,16 +448,52 @@ def two_wheel_turn(s, a, u):
 
 
 @njit(cache=True)
+def away_sign(distances, commanded):
+    """The leftover turn's sign (counter-clockwise +1) under LEFTOVER_AWAY, from the
+    beams' surface distances, leftmost first: away from the half whose nearest beam
+    reads nearer (the left half nearer: -1, a right turn; the right: +1), the middle
+    beam of an odd count in neither; `commanded` on a tie (nothing seen on either side
+    included)."""
+    n = distances.shape[0]
+    half = n // 2
+    left, right = np.inf, np.inf
+    for i in range(half):
+        left = min(left, distances[i])
+        right = min(right, distances[n - 1 - i])
+    if left < right:
+        return -1.0
+    if right < left:
+        return 1.0
+    return commanded
+
+
+@njit(cache=True)
 def two_wheel_finish(s):
     """two_wheel.TwoWheel.after_step: a move stopped short by more than the tolerance
-    turns the rest, at MAX_TURN per MAX_MOVE, in the commanded turn's direction; then
-    the drive halts. Returns (status, substeps run, in the goal)."""
+    turns the rest, at MAX_TURN per MAX_MOVE, in the commanded turn's direction
+    (LEFTOVER_AWAY: away from the nearer side, at the blocked pose, `away_sign`); under
+    BLOCKED_REFUSE the move is undone first (the state after the turn, then
+    mj_forward) and all of it is turned. Then the drive halts. Returns (status,
+    substeps run, in the goal)."""
     x, y, _ = base_pose(s)
     plan = s.plan
     rest = plan[0] - ((x - plan[2]) * plan[4] + (y - plan[3]) * plan[5])
     status, n = OK, 0
     if rest > s.tolerance:
-        leftover = plan[1] * rest * s.gain0 / s.gain1
+        sign = plan[1]
+        if s.leftover_turn == LEFTOVER_AWAY:
+            sign = away_sign(ranges(s.m, s.d, s.flags, s.sensordata, s.beam0, s.beam1,
+                                    s.metres_to_units, s.radius), sign)
+        if s.blocked_move == BLOCKED_REFUSE:
+            s.qpos[:] = s.qpos0
+            s.qvel[:] = s.qvel0
+            s.act[:] = s.act_saved
+            before = s.bad_qacc[0]
+            mj_forward(s.m, s.d)
+            if s.bad_qacc[0] != before:
+                return UNSTABLE, 0, False
+            rest = plan[0]
+        leftover = sign * rest * s.gain0 / s.gain1
         n = s.n_first
         status = two_wheel_phase(s, True, leftover, n, s.ramp_first)
         if status != OK:

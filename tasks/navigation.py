@@ -150,7 +150,8 @@ class Physics(dm_mujoco.Physics):
             sensordata=self._sensordata, xpos=self._xpos, xmat=self._xmat,
             velocity6=self._body_velocity, ncon=kernels.contact_count(data.ptr),
             contact_f=contact_f, contact_i=contact_i, layout=layout, qpos0=np.empty(mjm.nq),
-            qvel0=np.empty(mjm.nv), normal=np.empty(2), plan=np.zeros(6))
+            qvel0=np.empty(mjm.nv), act_saved=np.empty(mjm.na), normal=np.empty(2),
+            plan=np.zeros(6))
         (x0, y0), (x1, y1) = self.goal_box
         self._settings = dict(
             qyaw=-1 if self._qyaw is None else self._qyaw, free=self._free is not None,

@@ -3,7 +3,10 @@
 Action a in [-1, 1]: turn |a| rad (a < 0 left, counter-clockwise; a > 0 right),
 then move 2 (1 - |a|) units forward. When a collision stops the move, the rest
 of it becomes turn in the same direction as the commanded turn (right when a = 0),
-at the action's own rate of 1 rad per 2 units. Each part is scaled by noise.
+at the action's own rate of 1 rad per 2 units. Each part is scaled by noise. The
+readings `blocked_move` ("refuse": the blocked move is undone and all of it turned)
+and `leftover_turn` ("away": the rest turns away from the nearer side) change that
+(tasks.config; tasks.kernels.two_wheel_finish, which these hooks match).
 
 Two ways to realise it, picked by the robot file's actuators (docs/adding_a_robot.md):
 - `Physics`: a planar base whose velocity servos ``forward``, ``turn`` (and ``grip``)
@@ -13,9 +16,11 @@ Two ways to realise it, picked by the robot file's actuators (docs/adding_a_robo
 """
 import math
 
+import mujoco
 import numpy as np
 
 from tasks import kernels, navigation
+from tasks.config import BLOCKED_MOVES, LEFTOVER_TURNS
 
 MAX_TURN = 1.0  # rad per step
 MAX_MOVE = 2.0  # units per step
@@ -95,7 +100,9 @@ class TwoWheel(navigation.Navigation):
                                                          (MAX_TURN, MAX_MOVE)),
                          tolerance=BLOCKED_TOLERANCE,
                          ramp_first=physics.ramp_substeps(self._n_turn),
-                         ramp_rest=physics.ramp_substeps(self._n_move))
+                         ramp_rest=physics.ramp_substeps(self._n_move),
+                         blocked_move=BLOCKED_MOVES.index(self.config.blocked_move),
+                         leftover_turn=LEFTOVER_TURNS.index(self.config.leftover_turn))
         super().initialize_episode(physics)
 
     def before_step(self, action, physics):
@@ -106,6 +113,9 @@ class TwoWheel(navigation.Navigation):
         self._turn_sign = 1.0 if turn > 0 else -1.0
         physics.begin_turn(turn, self._n_turn)
         physics.step(self._n_turn)
+        if self.config.blocked_move == "refuse":  # the state a refused move returns to
+            data = physics.data.ptr
+            self._saved = (data.qpos.copy(), data.qvel.copy(), data.act.copy())
         x, y, heading = physics.robot_pose()
         self._from = (x, y, math.cos(heading), math.sin(heading))
         # The environment then runs the move phase (move_substeps).
@@ -116,7 +126,18 @@ class TwoWheel(navigation.Navigation):
         x0, y0, c, s = self._from
         rest = self._move - ((x - x0) * c + (y - y0) * s)
         if rest > BLOCKED_TOLERANCE:
-            leftover = self._turn_sign * rest * MAX_TURN / MAX_MOVE
+            sign = self._turn_sign
+            if self.config.leftover_turn == "away":
+                sign = kernels.away_sign(physics.ranges(), sign)
+            if self.config.blocked_move == "refuse":
+                data = physics.data.ptr
+                data.qpos[:], data.qvel[:], data.act[:] = self._saved
+                before = data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number
+                mujoco.mj_forward(physics.model.ptr, data)
+                if data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number != before:
+                    physics.raise_for(kernels.UNSTABLE)
+                rest = self._move
+            leftover = sign * rest * MAX_TURN / MAX_MOVE
             physics.begin_turn(leftover, self._n_turn)
             physics.step(self._n_turn)
         physics.halt()

@@ -36,7 +36,7 @@ DEFAULTS = {name: values[0] for name, values in READINGS.items()}
 #: The readings BEFORE was computed with (today's defaults, spelled out, so that a change
 #: of a default leaves BEFORE's meaning and these tests as they are).
 PROTOCOL3 = {"eq9_dead_zone": "zero", "initial_reliability": 1.0}
-FALLBACK_SWITCHES = ("eq9_dead_zone", "random_in_avoidance")
+FALLBACK_SWITCHES = ("eq9_dead_zone", "random_in_avoidance", "random_demand")
 
 
 def stream(name, steps=3000, explicit=False, **switches):
@@ -103,8 +103,10 @@ def test_each_alternative_changes_the_run_and_keeps_the_memory_consistent(name, 
     assert np.isfinite(ag.reliability).all() and (ag.reliability >= 0).all()
     assert (ag.reliability <= 1).all()
     changed = digests(actions, ag) != BEFORE[name]
-    # eq 8 (the one-group stream's behaviour) has no dead zone.
-    assert changed == (not (field == "eq9_dead_zone" and name == "one_group"))
+    # eq 8 (the one-group stream's behaviour) has no dead zone; the stream's fallback is
+    # the avoidance condition's, whose random action "uniform_walk" leaves Gaussian.
+    assert changed == (not (field == "eq9_dead_zone" and name == "one_group")
+                       and value != "uniform_walk")
 
 
 # -- validation ------------------------------------------------------------------------
@@ -443,3 +445,41 @@ def test_with_oldest_forgetting_reliability_changes_no_action():
     for other in ({"initial_reliability": 0.0}, {"eq7_scope": "decided_only"}):
         actions, _ = stream("groups_8_2", forgetting="oldest", **other)
         assert np.array_equal(actions, base), other
+
+
+# -- random_demand: the random action's distribution ------------------------------------
+
+@pytest.mark.parametrize("dim", [1, 2])
+def test_random_demand_draws_what_it_names(dim):
+    """By hand: the random walk's action from a fresh default_rng(5). "gaussian" is
+    normal(0, 0.5) per part, clipped; "uniform_walk" and "uniform_all" are -1 + 2 u per
+    part, u the stream's doubles (Generator.uniform(-1, 1)). The avoidance condition's
+    random action (rate 1: every step) is uniform under "uniform_all" only."""
+    behaviour = "eq8" if dim == 1 else "eq9-10"
+    ranges = np.zeros(7 if dim == 1 else 8)
+    u = np.random.default_rng(5).random(1 + dim)
+    z = np.random.default_rng(5).normal(0.0, 0.5, dim)
+    walk = {d: intrinsic.fallback_for(behaviour, "random", random_demand=d)(
+        ranges, np.random.default_rng(5)) for d in READINGS["random_demand"]}
+    np.testing.assert_array_equal(walk["gaussian"], np.clip(z, -1, 1))
+    np.testing.assert_array_equal(walk["uniform_walk"], -1.0 + 2.0 * u[:dim])
+    np.testing.assert_array_equal(walk["uniform_all"], -1.0 + 2.0 * u[:dim])
+    # avoidance, random share 1: one uniform draw (below 1), then the random action's
+    g = np.random.default_rng(5)
+    g.random()
+    z2 = g.normal(0.0, 0.5, dim)
+    avoid = {d: intrinsic.fallback_for(behaviour, "avoidance", 1.0, random_demand=d)(
+        ranges, np.random.default_rng(5)) for d in READINGS["random_demand"]}
+    np.testing.assert_array_equal(avoid["gaussian"], np.clip(z2, -1, 1))
+    np.testing.assert_array_equal(avoid["uniform_walk"], np.clip(z2, -1, 1))
+    np.testing.assert_array_equal(avoid["uniform_all"], -1.0 + 2.0 * u[1:])
+
+
+def test_a_uniform_walk_spreads_over_the_demand_range():
+    """Uniform over (-1, 1): mean 0 and sd 1 / sqrt(3) = 0.577 (the Gaussian's, clipped:
+    0.49), every value inside (-1, 1)."""
+    fb = intrinsic.fallback_for("eq8", "random", random_demand="uniform_walk")
+    rng = np.random.default_rng(0)
+    a = np.array([fb(np.zeros(7), rng)[0] for _ in range(20000)])
+    assert abs(a.mean()) < 0.01 and abs(a.std() - 1 / np.sqrt(3)) < 0.005
+    assert (a >= -1).all() and (a < 1).all()

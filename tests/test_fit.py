@@ -150,6 +150,13 @@ def test_a_tiny_study_runs_resumes_and_reaches_the_runs(tmp_path):
     (["--trial", "3"], "give --validate too"),
     (["--storage", "not a url://"], "bad --storage"),
     (["--backend", "slurm"], "unknown 'slurm'"),
+    (["--stage", "first-trial", "--seeds", "0-63"], "--robot two_wheel or floating"),
+    (["--stage", "first-trial", "--robot", "two_wheel", "--seeds", "0-9"], "at least 64 seeds"),
+    (["--stage", "first-trial", "--robot", "floating", "--seeds", "0-63", "--space", "bump,episode"],
+     "unknown reading 'episode'"),
+    (["--stage", "first-trial", "--robot", "two_wheel", "--seeds", "0-63", "--validate", "60-99"],
+     "--validate seeds must be seeds the search never uses"),
+    (["--robot", "two_wheel"], "--robot is for --stage first-trial"),
 ])
 def test_bad_fit_arguments_are_one_line_and_write_nothing(tmp_path, args, message):
     out = tmp_path / "fit"
@@ -157,3 +164,69 @@ def test_bad_fit_arguments_are_one_line_and_write_nothing(tmp_path, args, messag
     assert proc.returncode == 2
     assert message in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
     assert not out.exists()
+
+
+# -- stage 1: the first trials (experiments.studies.first_trials) ----------------------
+from experiments.studies import first_trials  # noqa: E402
+
+
+def test_the_first_trial_distance_by_hand_on_made_up_samples():
+    """Two-wheel, paper: random 6,087 +- 5,789 (49 of 50 at the goal), avoidance 956 +- 954
+    (50 of 50). Ours, made up: random 1,000, 3,000, 5,000 and one run not at the goal
+    (4 seeds); avoidance 100, 300, 500, 700 (4 seeds, all at the goal)."""
+    random = first_trials.sample([1000, 3000, None, 5000], 4)
+    avoidance = first_trials.sample([100, 300, 500, 700], 4)
+    assert random == {"mean": 3000.0, "sd": 2000.0, "reached": 3, "runs": 4, "tail": 0.25}
+    sd = math.sqrt((300 ** 2 + 100 ** 2 + 100 ** 2 + 300 ** 2) / 3)
+    assert avoidance["mean"] == 400.0 and avoidance["sd"] == pytest.approx(sd)
+    value, terms = first_trials.distance({"random": random, "avoidance": avoidance}, "two_wheel")
+    # random: the mean's and the sd's standard errors over 1/49 + 1/3; the tail pooled:
+    # (1 + 1) / (50 + 4) = 1/27 not at the goal
+    both = 1 / 49 + 1 / 3
+    assert terms["random/mean"] == pytest.approx(((3000 - 6087) / (5789 * math.sqrt(both))) ** 2)
+    assert terms["random/sd"] == pytest.approx(((2000 - 5789) / (5789 * math.sqrt(2 * both))) ** 2)
+    pooled = 2 / 54
+    assert terms["random/tail"] == pytest.approx(
+        (0.25 - 0.02) ** 2 / (pooled * (1 - pooled) * (1 / 50 + 1 / 4)))
+    both = 1 / 50 + 1 / 4
+    assert terms["avoidance/mean"] == pytest.approx(((400 - 956) / (954 * math.sqrt(both))) ** 2)
+    assert terms["avoidance/sd"] == pytest.approx(((sd - 954) / (954 * math.sqrt(2 * both))) ** 2)
+    assert terms["avoidance/tail"] == 0.0  # neither has a run without the goal
+    assert value == pytest.approx(sum(terms.values())) and len(terms) == 6
+    # the numbers: random mean z = -3087 / (5789 * 0.59476) = -0.8966
+    assert math.sqrt(terms["random/mean"]) == pytest.approx(0.8966, abs=1e-4)
+    # at the paper's own figures every term is 0
+    same = {c: dict(paper.FIRST_TRIALS[("floating", c)], tail=0.0) for c in paper.CONDITIONS}
+    assert first_trials.distance(same, "floating")[0] == 0.0
+    # fewer than 2 at the goal: MISSING_TERM for the mean and the sd
+    none = first_trials.sample([None, 400], 2)
+    t = first_trials.terms(none, paper.FIRST_TRIALS[("floating", "random")])
+    assert t["mean"] == t["sd"] == first_trials.MISSING_TERM
+
+
+def test_a_first_trial_study_runs_and_validates(tmp_path):
+    """One trial (the defaults) on 64 seeds of first-trial runs cut at 200 steps, then its
+    validation on 10 other seeds, through the real command line."""
+    import optuna
+    out = tmp_path / "fit1"
+    proc = ebrl("fit", "--stage", "first-trial", "--robot", "two_wheel", "--seeds", "0-63",
+                "--steps", "200", "--trials", "1", "--workers", "1", "--no-progress",
+                "--validate", "100-109", "--out", out)
+    assert proc.returncode == 0, proc.stderr
+    s = optuna.load_study(study_name="first_trial_two_wheel",
+                          storage=study.storage_url(None, out))
+    (trial,) = s.trials
+    assert trial.params == {"random_demand": "gaussian", "random_in_avoidance": "replace",
+                            "blocked_move": "stop", "leftover_turn": "commanded",
+                            "radius": 1.5}
+    rung = trial.user_attrs["rungs"][0]
+    assert rung["seeds"] == list(range(64))
+    runs = sorted((out / "runs").glob("*/two_wheel.first_trial/*/seed_*/run.json"))
+    assert len(runs) == 2 * (64 + 10)  # both conditions; validation's seeds beside
+    firsts = [json.loads(r.read_text())["metrics"]["first_trial_steps"] for r in runs
+              if "/avoidance/" in str(r) and int(r.parent.name[5:]) < 64]
+    assert rung["figures"]["avoidance"] == first_trials.sample(firsts, 64)
+    assert trial.value == pytest.approx(first_trials.distance(rung["figures"], "two_wheel")[0])
+    v = json.loads((out / "validation_first_trial_two_wheel.json").read_text())
+    assert v["seeds"] == list(range(100, 110)) and v["rows"]["best"] == v["rows"]["defaults"]
+    assert (out / "FIT_first_trial_two_wheel.md").exists()

@@ -141,6 +141,53 @@ def test_two_wheel_blocked_move_becomes_a_right_turn():
     env.close()
 
 
+def _blocked(blocked_move, leftover_turn, compiled=True):
+    """Two blocked steps, noise off: a = 0 facing the west block's east face (x = 20)
+    from 0.5 units; a = 0.1 (0.1 rad right, then 1.8 units) at heading 0.5 from there."""
+    env = quiet_env("two_wheel", seed=0, blocked_move=blocked_move,
+                    leftover_turn=leftover_turn)
+    env.compiled = compiled
+    env.reset()
+    poses = []
+    for heading, action in ((0.0, 0.0), (0.5, 0.1)):
+        env.physics.set_robot_pose(20.0 - RADIUS - 0.5, 35.0, heading)
+        poses.append(step_pose(env, [action])[1])
+    env.close()
+    return poses
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_a_refused_move_turns_all_of_it(compiled):
+    """blocked_move "refuse": the robot stays where the turn left it, and the whole move
+    is turned at 1 rad per 2 units: a = 0 turns 2 / 2 = 1 rad right; a = 0.1 turns 0.1,
+    then 1.8 / 2 = 0.9 rad right ("commanded") or left ("away": the block is nearer on
+    the right at heading 0.4): 0.4 - 0.9 = -0.5 and 0.4 + 0.9 = 1.3."""
+    (p, q), (_, r) = _blocked("refuse", "commanded", compiled), _blocked("refuse", "away", compiled)
+    x0 = 20.0 - RADIUS - 0.5
+    assert abs(p[0] - x0) < 1e-9 and abs(p[1] - 35.0) < 1e-9 and abs(p[2] + 1.0) < 1e-9
+    assert abs(q[0] - x0) < 1e-9 and abs(q[1] - 35.0) < 1e-9 and abs(q[2] + 0.5) < 1e-9
+    assert abs(r[0] - x0) < 1e-9 and abs(r[1] - 35.0) < 1e-9 and abs(r[2] - 1.3) < 1e-9
+
+
+def test_a_leftover_turn_away_mirrors_the_commanded_one():
+    """blocked_move "stop": the same move stops at the same place either way and the same
+    rest is turned; at heading 0.4 (a = 0.1) the block is nearer on the right, so "away"
+    turns it left by what "commanded" turns right: 0.4 + t and 0.4 - t. At a = 0 facing
+    the face head-on the beams either side read alike (a tie): both turn right."""
+    (p1, q1), (p2, q2) = _blocked("stop", "commanded"), _blocked("stop", "away")
+    assert q1[:2] == q2[:2] and abs((q2[2] - 0.4) + (q1[2] - 0.4)) < 1e-12
+    assert q1[2] < 0.4 - 0.3 and q2[2] > 0.4 + 0.3
+    assert p1 == p2 and p1[2] < -0.5
+
+
+def test_away_sign_by_hand():
+    inf = np.inf
+    assert kernels.away_sign(np.array([3.0, inf, inf, 1.0, inf, 5.0, inf]), 1.0) == -1.0
+    assert kernels.away_sign(np.array([inf, 6.0, inf, 0.0, 2.0, inf, inf]), -1.0) == 1.0
+    assert kernels.away_sign(np.array([2.0, inf, inf, 0.0, inf, inf, 2.0]), 1.0) == 1.0
+    assert kernels.away_sign(np.full(7, inf), -1.0) == -1.0  # nothing seen: commanded
+
+
 def test_floating_thrust_and_coast():
     env = quiet_env("floating", seed=0)
     env.reset()
@@ -379,6 +426,8 @@ def test_radius_changes_the_body_and_the_readings():
     ("bump", "wobble", "bump must be one of"), ("radius", 0.0, "radius must be positive"),
     ("radius", 7.0, "at most 5"), ("sensor_noise", float("nan"), "finite"),
     ("action_noise", 1.0, "below 1"), ("start_jitter", "yes", "true or false"),
+    ("blocked_move", "bounce", "blocked_move must be one of stop, refuse"),
+    ("leftover_turn", "left", "leftover_turn must be one of commanded, away"),
 ])
 def test_task_config_refuses_bad_values(field, value, message):
     with pytest.raises(ValueError, match=message):

@@ -87,7 +87,8 @@ def plan(args, overrides=()):
     from experiments.running import runner
     conditions = paper.CONDITIONS if args.condition == "all" else (args.condition,)
     return runner.plan(selected_robots(args), conditions, args.seeds, args.steps, overrides,
-                       args.drive, getattr(args, "agent", "ebrl"))
+                       args.drive, getattr(args, "agent", "ebrl"),
+                       getattr(args, "first_trial", False))
 
 
 def report_if_any(folder, ran):

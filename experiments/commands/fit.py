@@ -16,13 +16,21 @@ def add_parser(subparsers):
                         "same command continues a study")
     p.add_argument("--seeds", type=arguments.seeds, default=[0, 1],
                    help="every trial's seeds (default: 0-1)")
-    p.add_argument("--promote-seeds", type=arguments.seeds, default=list(range(6)),
-                   help="a promoted trial's seeds, including --seeds (default: 0-5)")
+    p.add_argument("--promote-seeds", type=arguments.seeds, default=None,
+                   help="a promoted trial's seeds, including --seeds (default: 0-5; with "
+                        "--stage first-trial, --seeds)")
     p.add_argument("--promote", default=0.1,
                    type=arguments.argument(lambda t: validate.fraction(t, "--promote")),
                    help="the share of trials promoted (default: %(default)s)")
     p.add_argument("--batch", type=arguments.up_to(64), default=4,
                    help="trials asked and run together (default: %(default)s)")
+    p.add_argument("--stage", type=arguments.choice(("table", "first-trial")), default="table",
+                   help="table: the readings against Section 3.6's table (default); "
+                        "first-trial: stage 1, one drive's physics and fallback readings "
+                        "against the paper's first-trial distributions (--robot; 64 or "
+                        "more --seeds), FIT_first_trial_DRIVE.md")
+    p.add_argument("--robot", type=arguments.choice(("two_wheel", "floating")), default=None,
+                   help="--stage first-trial: the drive's robot to fit")
     p.add_argument("--space", default="all",
                    help="comma-separated readings to search (default: all; see FIT.md)")
     p.add_argument("--steps", type=arguments.up_to(validate.MAX_STEPS), default=None,
@@ -48,8 +56,20 @@ def add_parser(subparsers):
 
 
 def _check(args):
-    """Every argument checked before any work: (space names, storage URL)."""
+    """Every argument checked before any work: (space names, storage URL); for --stage
+    first-trial, ((space names, rungs), storage URL)."""
     from experiments.studies import fit
+    if args.stage == "first-trial":
+        from experiments.studies import first_trials
+        names, rungs = first_trials.check_args(args.robot, args.space, args.seeds,
+                                               args.promote_seeds, args.validate)
+        if args.trial is not None and args.validate is None:
+            raise ValueError("--trial chooses the trial --validate runs; give --validate too")
+        return (names, rungs), study_storage(args)
+    if args.robot is not None:
+        raise ValueError("--robot is for --stage first-trial (the table's fit runs both robots)")
+    if args.promote_seeds is None:
+        args.promote_seeds = list(range(6))
     names = tuple(fit.BY_NAME) if args.space == "all" else \
         tuple(n.strip() for n in args.space.split(",") if n.strip())
     unknown = [n for n in names if n not in fit.BY_NAME]
@@ -107,6 +127,8 @@ def run(args):
         names, url = _check(args)
     except ValueError as e:
         return fail(str(e))
+    if args.stage == "first-trial":
+        return _first_trial(args, *names, url)
     from experiments.running import results
     from experiments.studies import fit, study
     rungs = (tuple(args.seeds),) if args.seeds == args.promote_seeds else \
@@ -122,6 +144,29 @@ def run(args):
     try:
         outcome, path, failed = _search(args, s, problem, names)
     except (results.ResultsError, _NoTrial) as e:
+        return fail(str(e))
+    print(f"{outcome.made} trials made now, {outcome.total} in the study ({study.shown(url)})")
+    return finish("fit", path, failed)
+
+
+def _first_trial(args, names, rungs, url):
+    """`ebrl fit --stage first-trial` after its checks (experiments.studies.first_trials)."""
+    from experiments.running import results
+    from experiments.studies import first_trials, study
+    problem = first_trials.Problem(args.robot, names, rungs, args.steps)
+    args.out.mkdir(parents=True, exist_ok=True)
+    name = args.study or f"first_trial_{args.robot}"
+    try:
+        s = study.load(name, url, args.out, args.sampler_seed, first=problem.defaults())
+    except Exception as e:  # a storage that cannot be opened: one line
+        return fail(study.hide(f"cannot open the study storage {url}: {results.error_line(e)}",
+                               url))
+    try:
+        outcome, path, failed = first_trials.fit(
+            problem, s, args.out, args.trials, batch=args.batch, workers=args.workers,
+            backend=args.backend, promote=args.promote, progress=not args.no_progress,
+            validate_seeds=args.validate, trial=args.trial)
+    except (results.ResultsError, ValueError) as e:
         return fail(str(e))
     print(f"{outcome.made} trials made now, {outcome.total} in the study ({study.shown(url)})")
     return finish("fit", path, failed)

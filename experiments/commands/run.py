@@ -32,6 +32,9 @@ def add_parser(subparsers):
     p.add_argument("--behaviour", type=pathlib.Path, default=None, metavar="FILE",
                    help="an intrinsic behaviour genome (JSON, ebrl.behaviour), e.g. "
                         "behaviours/paper_eq8.json or one `ebrl evolve` saved")
+    p.add_argument("--first-trial", action="store_true",
+                   help="end each run at its first goal (or its budget): its first trial, "
+                        "bit for bit a full run's, in folders ROBOT.first_trial/")
     arguments.add_no_progress(p)
     p.set_defaults(func=run)
 

@@ -18,6 +18,8 @@ import ebrl
 PROTOCOL_VERSION = 4  # 4: the adopted readings per drive, diff_drive's Euler; 3: float64 similarity
 #: Positions are stored as int16 hundredths of a unit.
 TRACE_SCALE = 100.0
+#: The end of a first-trial run's label (RunSpec.first_trial): "two_wheel.first_trial".
+FIRST_TRIAL = ".first_trial"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -36,6 +38,9 @@ class RunSpec:
     #: A genome of ebrl.behaviour (`ebrl run --behaviour FILE`): the fallback, its random
     #: action and the learning variables' initial values; None: Section 3.4's rules.
     behaviour: object = None
+    #: True: the run ends at its first goal (or its budget), its first trial bit for bit
+    #: a full run's (`ebrl run --first-trial`); in its own folders (`label`).
+    first_trial: bool = False
 
     @property
     def entry(self):
@@ -46,10 +51,12 @@ class RunSpec:
     @property
     def label(self):
         """The robot's name in folders and tables: its registered name, or its file's stem;
-        with ".<agent>" after it for a learner other than EBRL."""
+        with ".<agent>" after it for a learner other than EBRL, and FIRST_TRIAL after
+        that for a first-trial run."""
         name = (self.robot if self.drive is None and not self.robot.endswith(".toml")
                 else pathlib.Path(self.robot).stem)
-        return name if self.agent == "ebrl" else f"{name}.{self.agent}"
+        name = name if self.agent == "ebrl" else f"{name}.{self.agent}"
+        return name + FIRST_TRIAL if self.first_trial else name
 
     @property
     def name(self):
@@ -90,12 +97,26 @@ class RunSpec:
             "seed": self.seed,
             "steps": self.steps,
             "learner": self.agent,
-            "agent": dataclasses.asdict(self.agent_config()),
+            "agent": _recorded(dataclasses.asdict(self.agent_config())),
             "avoidance": entry.avoidance,
             "modalities": [list(m) for m in entry.modalities],
-            "task": dataclasses.asdict(task),
+            "task": _recorded(dataclasses.asdict(task)),
             "model_sha256": model_digest(entry, task),
-        } | ({} if self.behaviour is None else {"behaviour": _genome_dict(self.behaviour)})
+        } | ({} if self.behaviour is None else {"behaviour": _genome_dict(self.behaviour)}) \
+          | ({"first_trial": True} if self.first_trial else {})
+
+
+#: Readings added since PROTOCOL_VERSION 4, with their defaults (which compute what the
+#: code computed before them, bit for bit): a run's parameters name one only when it is
+#: set otherwise, so the runs on disk still match.
+UNRECORDED_DEFAULTS = {"random_demand": "gaussian", "blocked_move": "stop",
+                       "leftover_turn": "commanded"}
+
+
+def _recorded(fields):
+    """A config's fields as a run's parameters record them (UNRECORDED_DEFAULTS left out)."""
+    return {k: v for k, v in fields.items()
+            if not (k in UNRECORDED_DEFAULTS and v == UNRECORDED_DEFAULTS[k])}
 
 
 def _genome_dict(genome):
@@ -149,8 +170,8 @@ def make_agent(spec, env):
     config = spec.agent_config()
     # The fallback's own readings, where the learner's config has them (EBRL's does; the
     # baselines take fallback_for's defaults, which are EBRL's defaults).
-    switches = {k: getattr(config, k) for k in ("eq9_dead_zone", "random_in_avoidance")
-                if hasattr(config, k)}
+    switches = {k: getattr(config, k) for k in ("eq9_dead_zone", "random_in_avoidance",
+                                                 "random_demand") if hasattr(config, k)}
     if spec.behaviour is not None:
         switches.pop("eq9_dead_zone", None)  # the genome's hold decides
         fallback = ebrl.behaviour.fallback(spec.behaviour, spec.condition, **switches)
@@ -202,10 +223,17 @@ class Trials:
 
     trace[k]: the position after step k (k = 0: the first start); starts[i]: the start of
     trial i; trial_ends[i]: the step at which trial i ended. Trial i's path is starts[i]
-    then trace[end(i-1)+1 : end(i)+1]."""
+    then trace[end(i-1)+1 : end(i)+1].
 
-    def __init__(self, env, agent, keys, budget, *, fused=True, on_step=None, stretch=None):
+    trials: stop after that many trials end (1: a first-trial run, RunSpec.first_trial),
+    even with steps left; `done` then says so and `run` does nothing more. The trial
+    that ends is the same bits as in a run without the stop (its reset included, so
+    starts has the next trial's start as ever)."""
+
+    def __init__(self, env, agent, keys, budget, *, fused=True, on_step=None, stretch=None,
+                 trials=None):
         self.env, self.agent, self.keys, self.on_step = env, agent, keys, on_step
+        self.trials = trials
         self.trace = np.empty((budget + 1, 2), dtype=np.float32)
         self.starts, self.trial_ends, self.step = [], [], 0
         self._ts = env.reset()
@@ -226,6 +254,11 @@ class Trials:
         return self._loop is not None
 
     @property
+    def done(self):
+        """True once `trials` trials have ended (never without `trials`)."""
+        return self.trials is not None and len(self.trial_ends) >= self.trials
+
+    @property
     def observation(self):
         """The last observation, as the next step reads it."""
         if self._loop is not None and self._observation is None:
@@ -241,14 +274,14 @@ class Trials:
     def run(self, steps):
         """`steps` more protocol steps."""
         end = self.step + steps
-        while self._loop is not None and self.step < end:
+        while self._loop is not None and self.step < end and not self.done:
             n = end - self.step if self._stretch is None else min(self._stretch, end - self.step)
             done, goal = self._loop.stretch(self.step + 1, n, self._observation)
             self.step, self._observation = self.step + done, None
             if goal:
                 self._trial_ended()
         env, agent, on_step = self.env, self.agent, self.on_step
-        while self.step < end:
+        while self.step < end and not self.done:
             self.step += 1
             obs, ranges = agent_input(self._ts.observation, self.keys)
             self._ts = env.step(agent.act(obs, ranges=ranges))
@@ -264,7 +297,8 @@ class Trials:
 
 
 def execute(spec, on_step=None, fused=True):
-    """Runs one spec to its budget and returns its trials, trace and metrics.
+    """Runs one spec to its budget (a first-trial spec: to its first goal, if sooner) and
+    returns its trials, trace (the positions up to its last step) and metrics.
 
     on_step(step, env, trace, trial_begin, trial_start, agent), if given, is called after
     every step (videos use it; agent.decision says who chose the step's action).
@@ -278,13 +312,15 @@ def execute(spec, on_step=None, fused=True):
     agent = make_agent(spec, env)
     keys = tuple(key for key, _ in spec.entry.modalities)
     started = time.perf_counter()
-    trials = Trials(env, agent, keys, spec.steps, fused=fused, on_step=on_step)
+    trials = Trials(env, agent, keys, spec.steps, fused=fused, on_step=on_step,
+                    trials=1 if spec.first_trial else None)
     trials.run(spec.steps)
     seconds = time.perf_counter() - started
     env.close()
     return {
         "trial_ends": np.asarray(trials.trial_ends, dtype=np.int64),
-        "trace": compact(trials.trace),
+        "steps_run": int(trials.step),
+        "trace": compact(trials.trace[:trials.step + 1]),
         "starts": compact(trials.starts),
         "seconds": seconds,
         "memory_decisions": int(agent.memory_decisions),

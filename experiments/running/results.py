@@ -165,9 +165,10 @@ def write_run(root, spec, result, versions_info):
     w.writerow(["trial", "steps", "cumulative_steps", "reached"])
     for i, (n, c) in enumerate(zip(lengths, ends)):
         w.writerow([i, int(n), int(c), 1])
-    unfinished = spec.steps - (int(ends[-1]) if len(ends) else 0)
+    ran = result.get("steps_run", spec.steps)  # a first-trial run stops at its goal
+    unfinished = ran - (int(ends[-1]) if len(ends) else 0)
     if unfinished:
-        w.writerow([len(ends), unfinished, spec.steps, 0])
+        w.writerow([len(ends), unfinished, ran, 0])
     atomic_write(folder / "trials.csv", rows.getvalue())
     buf = io.BytesIO()
     np.savez_compressed(buf, trace=result["trace"], starts=result["starts"],
@@ -298,7 +299,7 @@ def robot_order(label):
     from experiments.running.protocol import AGENTS
     from tasks.robots import ROBOTS
     names = list(ROBOTS)
-    robot, _, agent = label.partition(".")
+    robot, _, agent = label.removesuffix(protocol.FIRST_TRIAL).partition(".")
     return (names.index(robot) if robot in names else len(names),
             AGENTS.index(agent or "ebrl") if (agent or "ebrl") in AGENTS else len(AGENTS))
 

@@ -44,11 +44,13 @@ TEST_FAIL, TEST_CRASH = "EBRL_TEST_FAIL", "EBRL_TEST_CRASH"
 Ran = collections.namedtuple("Ran", "made on_disk failed")
 
 
-def plan(robots, conditions, seeds, steps=None, overrides=(), drive=None, agent="ebrl"):
+def plan(robots, conditions, seeds, steps=None, overrides=(), drive=None, agent="ebrl",
+         first_trial=False):
     """Specs in the order to start them: the longest first, for an even finish.
 
     steps: None for each robot's budget (the registry's), a number for all, or a dict
-    by robot; drive: for robots given as files."""
+    by robot; drive: for robots given as files; first_trial: runs that end at their
+    first goal (protocol.RunSpec.first_trial)."""
     from tasks.robots import resolve
 
     def budget(robot):
@@ -57,7 +59,7 @@ def plan(robots, conditions, seeds, steps=None, overrides=(), drive=None, agent=
         return steps if steps is not None else resolve(robot, drive).budget
 
     specs = [protocol.RunSpec(r, c, s, budget(r), tuple(sorted(dict(overrides).items())),
-                              drive, agent)
+                              drive, agent, first_trial=first_trial)
              for r in robots for c in conditions for s in seeds]
     return sorted(specs, key=lambda s: -s.steps)
 
@@ -127,7 +129,7 @@ def run(specs, out, *, workers=None, backend="local", progress=True):
             failed.append((spec, results.write_failure(where(spec), spec, error)))
         else:
             results.write_run(where(spec), spec, result, versions)
-            steps_done += spec.steps
+            steps_done += result.get("steps_run", spec.steps)
         if bar is not None:
             rate = steps_done / max(time.perf_counter() - started, 1e-9)
             bar.set_postfix_str(f"{rate:,.0f} steps/s, {steps_done:,}/{total_steps:,} steps"

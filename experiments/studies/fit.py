@@ -16,6 +16,11 @@ with scale = log(1 + sd / mean) of the paper's own figure (the spread of one see
 figure, as the paper reports it) for first-trial steps and steps per trial, and
 SHRINK_SCALE for the shrinks (the paper gives no spread). A figure the trial cannot
 compute (no run reached the goal) costs MISSING_TERM.
+
+That is the "table" stage (STAGES). The "first-trial" stage (stage 1 of issue 29:
+`ebrl fit --stage first-trial --robot DRIVE`) fits one drive's physics and fallback
+readings to the paper's first-trial distributions on first-trial runs, on the same
+study runner: experiments/studies/first_trials.py.
 """
 import dataclasses
 import json
@@ -36,6 +41,8 @@ SHRINK_SCALE = 0.3
 MISSING_TERM = 25.0
 CLAIM_PENALTY = 1.0
 FIGURES = ("first_trial_steps", "steps_per_trial", "shrink")
+#: `ebrl fit --stage`: this module's objective, or stage 1's (experiments.studies.first_trials).
+STAGES = ("table", "first-trial")
 
 
 @dataclasses.dataclass(frozen=True)
