@@ -118,98 +118,146 @@ def parse(path):
     """The Mount of a mount file; MountError on any bad field (the file is not compiled
     here: `check` does that)."""
     path = pathlib.Path(path)
+    data = _read(path)
+    fields = _Fields(path)
+    drive, model, joints = _parse_top(fields, data)
+    bumper = _parse_bumper(fields, data)
+    beams = _parse_beams(fields, data, drive)
+    action, gait = _parse_action(fields, data, drive, joints)
+    readings, check = _parse_tables(fields, data, drive)
+    integrator = _parse_integrator(fields, data)
+    text, number, names = fields.text, fields.number, fields.names
+    return Mount(path=path.resolve(), name=text(data, "name", "name", path.stem),
+                 file=data["file"], model=model, drive=drive,
+                 unit=number(data, "unit", "unit", 0.1), base=text(data, "base", "base"),
+                 joints=joints, drop=names(data, "drop", "drop", DROPS),
+                 drop_geoms=names(data, "drop_geoms", "drop_geoms"),
+                 drop_bodies=names(data, "drop_bodies", "drop_bodies"),
+                 keep_options=names(data, "keep_options", "keep_options", OPTIONS),
+                 bumper=bumper, beams=beams, action=action, gait=gait,
+                 timestep=number(data, "timestep", "timestep"), integrator=integrator,
+                 time_scale=number(data, "time_scale", "time_scale", 1.0),
+                 readings=readings, check=check,
+                 description=str(data.get("description", "")))
+
+
+def _read(path):
+    """The mount file's TOML as a dict."""
     if not path.is_file():
         raise MountError(f"no mount file at {path}")
     try:
-        data = tomllib.loads(path.read_text())
+        return tomllib.loads(path.read_text())
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
         raise MountError(f"{path}: not a TOML file: {e}") from None
 
-    def fail(field, message):
-        raise MountError(f"{path}: {field}: {message}")
 
-    def table(d, keys, where):
+class _Fields:
+    """The field checks of one mount file: each fails with MountError naming it."""
+
+    def __init__(self, path):
+        self.path = path
+
+    def fail(self, field, message):
+        raise MountError(f"{self.path}: {field}: {message}")
+
+    def table(self, d, keys, where):
         if not isinstance(d, dict):
-            fail(where, "must be a table")
+            self.fail(where, "must be a table")
         for k in d:
             if k not in keys:
-                fail(f"{where}.{k}" if where else k,
-                     f"unknown key; valid: {', '.join(sorted(keys))}")
+                self.fail(f"{where}.{k}" if where else k,
+                          f"unknown key; valid: {', '.join(sorted(keys))}")
         return d
 
-    def text(d, key, where, default=None):
+    def text(self, d, key, where, default=None):
         v = d.get(key, default)
         if v is default and default is None and key not in d:
             return None
         if not isinstance(v, str) or not v:
-            fail(where, "must be a non-empty string")
+            self.fail(where, "must be a non-empty string")
         return v
 
-    def number(d, key, where, default=None, positive=True):
+    def number(self, d, key, where, default=None, positive=True):
         if key not in d:
             return default
         v = d[key]
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-            fail(where, f"must be a number, got {v!r}")
+            self.fail(where, f"must be a number, got {v!r}")
         if positive and v <= 0:
-            fail(where, f"must be positive, got {v!r}")
+            self.fail(where, f"must be positive, got {v!r}")
         return float(v)
 
-    def names(d, key, where, valid=None):
+    def names(self, d, key, where, valid=None):
         v = d.get(key, [])
         if not isinstance(v, list) or not all(isinstance(x, str) and x for x in v):
-            fail(where, "must be a list of strings")
+            self.fail(where, "must be a list of strings")
         if valid is not None:
             for x in v:
                 if x not in valid:
-                    fail(where, f"unknown {x!r}; valid: {', '.join(valid)}")
+                    self.fail(where, f"unknown {x!r}; valid: {', '.join(valid)}")
         return tuple(v)
 
-    table(data, _TOP, "")
+
+def _parse_top(fields, data):
+    """The top table's keys, its required fields, the drive, the robot file (resolved)
+    and the joints."""
+    fail = fields.fail
+    fields.table(data, _TOP, "")
     for key in ("file", "drive", "base"):
         if key not in data:
             fail(key, "missing (required)")
-    drive = text(data, "drive", "drive")
+    drive = fields.text(data, "drive", "drive")
     if drive not in ACTIONS:
         fail("drive", f"unknown drive {drive!r}; valid: {', '.join(ACTIONS)}")
-    model = resolve_file(text(data, "file", "file"), "file", path)
+    model = resolve_file(fields.text(data, "file", "file"), "file", fields.path)
     joints = data.get("joints", "file")
     if joints not in JOINTS:
         fail("joints", f"must be one of {', '.join(JOINTS)}, got {joints!r}")
+    return drive, model, joints
 
-    bumper = table(data.get("bumper", {}), _BUMPER, "bumper")
+
+def _parse_bumper(fields, data):
+    """Mount.bumper: ("geom", name) or (shape, radius, height, half_length)."""
+    fail, number = fields.fail, fields.number
+    bumper = fields.table(data.get("bumper", {}), _BUMPER, "bumper")
     if "geom" in bumper:
         if set(bumper) - {"geom"}:
             fail("bumper", "a file's geom (geom) or an added shape (shape, radius, height), not both")
-        bumper_t = ("geom", text(bumper, "geom", "bumper.geom"))
-    elif "shape" in bumper:
+        return ("geom", fields.text(bumper, "geom", "bumper.geom"))
+    if "shape" in bumper:
         shape = bumper["shape"]
         if shape not in ("sphere", "capsule"):
             fail("bumper.shape", f"must be sphere or capsule, got {shape!r}")
         if "radius" not in bumper:
             fail("bumper.radius", "missing (required with shape)")
-        bumper_t = (shape, number(bumper, "radius", "bumper.radius"),
-                    number(bumper, "height", "bumper.height", 0.0, positive=False),
-                    number(bumper, "half_length", "bumper.half_length", 0.0, positive=False))
-    else:
-        fail("bumper", "missing: geom = a geom of the file, or shape, radius, height")
+        return (shape, number(bumper, "radius", "bumper.radius"),
+                number(bumper, "height", "bumper.height", 0.0, positive=False),
+                number(bumper, "half_length", "bumper.half_length", 0.0, positive=False))
+    fail("bumper", "missing: geom = a geom of the file, or shape, radius, height")
 
-    beams = table(data.get("beams", {}), _BEAMS, "beams")
+
+def _parse_beams(fields, data, drive):
+    """Mount.beams: ("add", height) or ("sensors", name, ...)."""
+    fail = fields.fail
+    beams = fields.table(data.get("beams", {}), _BEAMS, "beams")
     if "sensors" in beams:
         if "height" in beams:
             fail("beams", "the file's rangefinders (sensors) or added beams (height), not both")
-        listed = names(beams, "sensors", "beams.sensors")
+        listed = fields.names(beams, "sensors", "beams.sensors")
         count = BEAMS[drive][0]
         if len(listed) != count:
             fail("beams.sensors", f"the {drive} drive needs {count} rangefinders, got {len(listed)}")
-        beams_t = ("sensors", *listed)
-    elif "height" in beams:
-        beams_t = ("add", number(beams, "height", "beams.height", positive=False))
-    else:
-        fail("beams", "missing: height = the added beams' height above the base (m), "
-                      "or sensors = the file's rangefinders in order")
+        return ("sensors", *listed)
+    if "height" in beams:
+        return ("add", fields.number(beams, "height", "beams.height", positive=False))
+    fail("beams", "missing: height = the added beams' height above the base (m), "
+                  "or sensors = the file's rangefinders in order")
 
-    action = table(data.get("action", {}), _ACTION, "action")
+
+def _parse_action(fields, data, drive, joints):
+    """Mount.action (kind, (role, name) pairs...) and Mount.gait."""
+    fail = fields.fail
+    action = fields.table(data.get("action", {}), _ACTION, "action")
     kind = action.get("kind")
     if kind not in ACTIONS[drive]:
         fail("action.kind", f"the {drive} drive takes one of {', '.join(ACTIONS[drive])}, "
@@ -217,41 +265,62 @@ def parse(path):
     roles = ()
     gait = ()
     if kind == "actuators":
-        for role in REQUIRED_ROLES[drive]:
-            if role not in action:
-                fail(f"action.{role}", "missing: the file's actuator for it")
-        roles = tuple((r, text(action, r, f"action.{r}")) for r in ACTUATOR_ROLES[drive]
-                      if r in action)
+        roles = _actuator_roles(fields, action, drive)
     elif kind == "wheels":
-        for role in ("left", "right"):
-            if role not in action:
-                fail(f"action.{role}", "missing: the file's wheel joint")
-        roles = (("left", text(action, "left", "action.left")),
-                 ("right", text(action, "right", "action.right")))
-        # the wheel servos' gains: diff_drive.xml's unless given (kp N m/rad, kv N m s/rad,
-        # force the servo's torque limit, N m)
-        gains = tuple((k, number(action, k, f"action.{k}", d))
-                      for k, d in (("kp", 2.0), ("kv", 0.05), ("force", 0.12)))
-        gait = gains
+        roles, gait = _wheel_roles(fields, action)
     elif kind == "gait":
-        roles = tuple((r, text(action, r, f"action.{r}")) for r in
-                      (f"{j}_{i}" for j in ("hip", "ankle") for i in range(4)) if r in action)
-        g = action.get("gait", {})
-        if not isinstance(g, dict):
-            fail("action.gait", "must be a table")
-        from tasks import gait as gait_module
-        for k, v in g.items():
-            if k not in gait_module.PARAMETERS:
-                fail(f"action.gait.{k}", f"unknown key; valid: {', '.join(gait_module.PARAMETERS)}")
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                fail(f"action.gait.{k}", f"must be a number, got {v!r}")
-        gait = tuple(sorted((k, float(v)) for k, v in g.items()))
+        roles, gait = _gait_roles(fields, action)
     extra = set(action) - {"kind", "gait"} - {r for r, _ in roles} - {k for k, _ in gait}
     if extra:
         fail(f"action.{sorted(extra)[0]}", f"not a field of action kind {kind!r}")
     if kind == "servos" and joints == "free":
         fail("action.kind", "servos drive planar joints (joints = file or planar), not a free joint")
+    return (kind, *roles), gait
 
+
+def _actuator_roles(fields, action, drive):
+    """An "actuators" action's (role, the file's actuator) pairs."""
+    for role in REQUIRED_ROLES[drive]:
+        if role not in action:
+            fields.fail(f"action.{role}", "missing: the file's actuator for it")
+    return tuple((r, fields.text(action, r, f"action.{r}")) for r in ACTUATOR_ROLES[drive]
+                 if r in action)
+
+
+def _wheel_roles(fields, action):
+    """A "wheels" action's (role, the file's wheel joint) pairs and its servos' gains."""
+    for role in ("left", "right"):
+        if role not in action:
+            fields.fail(f"action.{role}", "missing: the file's wheel joint")
+    roles = (("left", fields.text(action, "left", "action.left")),
+             ("right", fields.text(action, "right", "action.right")))
+    # the wheel servos' gains: diff_drive.xml's unless given (kp N m/rad, kv N m s/rad,
+    # force the servo's torque limit, N m)
+    gains = tuple((k, fields.number(action, k, f"action.{k}", d))
+                  for k, d in (("kp", 2.0), ("kv", 0.05), ("force", 0.12)))
+    return roles, gains
+
+
+def _gait_roles(fields, action):
+    """A "gait" action's (role, the file's motor) pairs and its gait's parameters."""
+    fail = fields.fail
+    roles = tuple((r, fields.text(action, r, f"action.{r}")) for r in
+                  (f"{j}_{i}" for j in ("hip", "ankle") for i in range(4)) if r in action)
+    g = action.get("gait", {})
+    if not isinstance(g, dict):
+        fail("action.gait", "must be a table")
+    from tasks import gait as gait_module
+    for k, v in g.items():
+        if k not in gait_module.PARAMETERS:
+            fail(f"action.gait.{k}", f"unknown key; valid: {', '.join(gait_module.PARAMETERS)}")
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            fail(f"action.gait.{k}", f"must be a number, got {v!r}")
+    return roles, tuple(sorted((k, float(v)) for k, v in g.items()))
+
+
+def _parse_tables(fields, data, drive):
+    """Mount.readings and Mount.check, from the readings and check tables."""
+    fail = fields.fail
     readings = data.get("readings", {})
     if not isinstance(readings, dict):
         fail("readings", "must be a table")
@@ -262,25 +331,20 @@ def parse(path):
     for k in check:
         if k not in valid:
             fail(f"check.{k}", f"unknown key; valid: {', '.join(valid)}")
-        number(check, k, f"check.{k}", positive=k != "falls")
+        fields.number(check, k, f"check.{k}", positive=k != "falls")
+    return (tuple(sorted(readings.items())),
+            tuple(sorted((k, float(v)) for k, v in check.items())))
+
+
+def _parse_integrator(fields, data):
+    """The integrator field, one of models.INTEGRATORS, or None."""
     integrator = data.get("integrator")
     if integrator is not None:
         import models
         if integrator not in models.INTEGRATORS:
-            fail("integrator", f"unknown integrator {integrator!r}; valid: {', '.join(models.INTEGRATORS)}")
-    return Mount(path=path.resolve(), name=text(data, "name", "name", path.stem),
-                 file=data["file"], model=model, drive=drive,
-                 unit=number(data, "unit", "unit", 0.1), base=text(data, "base", "base"),
-                 joints=joints, drop=names(data, "drop", "drop", DROPS),
-                 drop_geoms=names(data, "drop_geoms", "drop_geoms"),
-                 drop_bodies=names(data, "drop_bodies", "drop_bodies"),
-                 keep_options=names(data, "keep_options", "keep_options", OPTIONS),
-                 bumper=bumper_t, beams=beams_t, action=(kind, *roles), gait=gait,
-                 timestep=number(data, "timestep", "timestep"), integrator=integrator,
-                 time_scale=number(data, "time_scale", "time_scale", 1.0),
-                 readings=tuple(sorted(readings.items())),
-                 check=tuple(sorted((k, float(v)) for k, v in check.items())),
-                 description=str(data.get("description", "")))
+            fields.fail("integrator", f"unknown integrator {integrator!r}; valid: "
+                                      f"{', '.join(models.INTEGRATORS)}")
+    return integrator
 
 
 def _fail(mount, field, message):
@@ -293,9 +357,27 @@ def _by_name(items, name):
 
 def robot_spec(mount):
     """The robot file's MjSpec, edited as the mount says (the file itself is untouched)."""
-    import mujoco
-
     import models
+    spec, base = _load(mount)
+    names = {}
+    if mount.base != "base":
+        names["base"] = mount.base
+    planar = mount.joints == "planar" or (mount.joints == "file" and not _has_free(base))
+    beam_names = _drop(mount, spec, names)
+    _root_joints(mount, spec, base)
+    _bumper(mount, spec, base, planar, names)
+    _beams(mount, spec, base, beam_names)
+    _drive_actuators(mount, spec, base, names)
+    _options(mount, spec)
+    if names:
+        spec.add_text(name=models.NAMES_TEXT,
+                      data=" ".join(f"{k}={v}" for k, v in sorted(names.items())))
+    return spec
+
+
+def _load(mount):
+    """The robot file's MjSpec and its base body."""
+    import mujoco
     try:
         spec = mujoco.MjSpec.from_file(str(mount.model))
     except ValueError as e:
@@ -303,13 +385,13 @@ def robot_spec(mount):
     base = spec.body(mount.base)
     if base is None or base.name == "world":
         _fail(mount, "base", f"no body named {mount.base!r} in {mount.model}")
-    names = {}
-    if mount.base != "base":
-        names["base"] = mount.base
-    drive, kind = mount.drive, mount.action[0]
-    planar = mount.joints == "planar" or (mount.joints == "file" and not _has_free(base))
+    return spec, base
 
-    # -- drop -------------------------------------------------------------------
+
+def _drop(mount, spec, names):
+    """Deletes what the mount drops, and what the drive's own elements replace; returns
+    the names of the file's rangefinders the beams read."""
+    kind = mount.action[0]
     drop = set(mount.drop)
     if kind in ("servos", "thrusters", "wheels"):
         drop |= {"actuators"}      # the drive's own actuators replace the file's
@@ -327,6 +409,13 @@ def robot_spec(mount):
             if element is None:
                 _fail(mount, field, f"no {field[5:-1]} named {name!r} in {mount.model}")
             spec.delete(element)
+    _drop_categories(spec, drop)
+    return _drop_sensors(mount, spec, drop)
+
+
+def _drop_categories(spec, drop):
+    """Deletes every element of the categories in drop (but sensors: _drop_sensors)."""
+    import mujoco
     skybox = mujoco.mjtTexture.mjTEXTURE_SKYBOX
     elements = {"world": lambda: spec.worldbody.geoms, "lights": lambda: spec.lights,
                 "cameras": lambda: spec.cameras, "actuators": lambda: spec.actuators,
@@ -336,6 +425,12 @@ def robot_spec(mount):
         if category in drop:
             for element in list(listed()):
                 spec.delete(element)
+
+
+def _drop_sensors(mount, spec, drop):
+    """Deletes every rangefinder the beams do not name (every sensor, with "sensors" in
+    drop); returns the names of those they do."""
+    import mujoco
     beam_names = mount.beams[1:] if mount.beams[0] == "sensors" else ()
     for name in beam_names:
         sensor = _by_name(spec.sensors, name)
@@ -345,38 +440,32 @@ def robot_spec(mount):
         is_beam = sensor.type == mujoco.mjtSensor.mjSENS_RANGEFINDER
         if ("sensors" in drop and sensor.name not in beam_names) or (is_beam and sensor.name not in beam_names):
             spec.delete(sensor)   # only the beams the mount names (or adds) are read
+    return beam_names
 
-    # -- joints -------------------------------------------------------------------
+
+def _root_joints(mount, spec, base):
+    """The base's joints: slides x, y (and hinge yaw) in place of its own for "planar",
+    a free joint added for "free"."""
+    import mujoco
     if mount.joints == "planar":
         for joint in list(base.joints):
             spec.delete(joint)
         _plain_joint(base, "x", mujoco.mjtJoint.mjJNT_SLIDE, [1, 0, 0])
         _plain_joint(base, "y", mujoco.mjtJoint.mjJNT_SLIDE, [0, 1, 0])
-        if drive == "two_wheel":
+        if mount.drive == "two_wheel":
             _plain_joint(base, "yaw", mujoco.mjtJoint.mjJNT_HINGE, [0, 0, 1])
     elif mount.joints == "free":
         if list(base.joints):
             _fail(mount, "joints", f"body {mount.base!r} has joints of its own: joints = \"file\"")
         base.add_freejoint(name="root")
 
-    # -- contacts and the bumper --------------------------------------------------
-    # The room's contact bits (models/__init__.py): the bumper 2 / 1 touches walls only;
-    # a planar robot's other geoms touch nothing; a free robot's touch the walls and the
-    # floor (0 / 5), never the bumper or each other.
-    hull = None
-    if mount.bumper[0] == "geom":
-        hull = spec.geom(mount.bumper[1])
-        if hull is None:
-            _fail(mount, "bumper.geom", f"no geom named {mount.bumper[1]!r} in {mount.model}")
-        if hull.type not in (mujoco.mjtGeom.mjGEOM_SPHERE, mujoco.mjtGeom.mjGEOM_CYLINDER,
-                             mujoco.mjtGeom.mjGEOM_CAPSULE):
-            _fail(mount, "bumper.geom", f"geom {mount.bumper[1]!r} must be a sphere, cylinder "
-                                         "or capsule (its radius is the robot's)")
-        if _owner(spec, hull) != mount.base:
-            _fail(mount, "bumper.geom", f"geom {mount.bumper[1]!r} is not on the base body "
-                                         f"{mount.base!r}")
-        if mount.bumper[1] != "hull":
-            names["hull"] = mount.bumper[1]
+
+# The room's contact bits (models/__init__.py): the bumper 2 / 1 touches walls only;
+# a planar robot's other geoms touch nothing; a free robot's touch the walls and the
+# floor (0 / 5), never the bumper or each other.
+def _bumper(mount, spec, base, planar, names):
+    """The bumper (the file's geom, or a shape added) and the room's contact bits."""
+    hull = _file_bumper(mount, spec, names) if mount.bumper[0] == "geom" else None
     contract = mount.bumper[0] == "geom" and mount.bumper[1] == "hull" and mount.base == "base"
     if not contract:   # a contract file keeps its own bits; a mounted one gets the room's
         for body in _bodies(base):
@@ -385,23 +474,54 @@ def robot_spec(mount):
                     continue
                 geom.contype, geom.conaffinity = (0, 0) if planar else (0, 5)
     if hull is None:
-        shape, radius, height, half = mount.bumper
-        hull = base.add_geom(name="hull", pos=[0, 0, height], group=3,
-                             type=(mujoco.mjtGeom.mjGEOM_SPHERE if shape == "sphere"
-                                   else mujoco.mjtGeom.mjGEOM_CAPSULE),
-                             size=[radius, half, 0], mass=0 if not planar else 1,
-                             rgba=[0.2, 0.35, 0.8, 0.15])
-        if not planar:
-            hull.mass = 0.0
-            hull.density = 0.0
+        hull = _added_bumper(mount, base, planar)
     if not contract:
         hull.contype, hull.conaffinity, hull.condim = 2, 1, 1
         hull.solref = [0.02, 1]
         hull.solimp = [0.99, 0.999, 0.001, 0.5, 2]
 
-    # -- beams ------------------------------------------------------------------
+
+def _file_bumper(mount, spec, names):
+    """The file's geom the bumper names: a sphere, cylinder or capsule on the base."""
+    import mujoco
+    hull = spec.geom(mount.bumper[1])
+    if hull is None:
+        _fail(mount, "bumper.geom", f"no geom named {mount.bumper[1]!r} in {mount.model}")
+    if hull.type not in (mujoco.mjtGeom.mjGEOM_SPHERE, mujoco.mjtGeom.mjGEOM_CYLINDER,
+                         mujoco.mjtGeom.mjGEOM_CAPSULE):
+        _fail(mount, "bumper.geom", f"geom {mount.bumper[1]!r} must be a sphere, cylinder "
+                                     "or capsule (its radius is the robot's)")
+    if _owner(spec, hull) != mount.base:
+        _fail(mount, "bumper.geom", f"geom {mount.bumper[1]!r} is not on the base body "
+                                     f"{mount.base!r}")
+    if mount.bumper[1] != "hull":
+        names["hull"] = mount.bumper[1]
+    return hull
+
+
+def _added_bumper(mount, base, planar):
+    """The bumper's shape added to the base as the geom hull (massless on a free base)."""
+    import mujoco
+    shape, radius, height, half = mount.bumper
+    hull = base.add_geom(name="hull", pos=[0, 0, height], group=3,
+                         type=(mujoco.mjtGeom.mjGEOM_SPHERE if shape == "sphere"
+                               else mujoco.mjtGeom.mjGEOM_CAPSULE),
+                         size=[radius, half, 0], mass=0 if not planar else 1,
+                         rgba=[0.2, 0.35, 0.8, 0.15])
+    if not planar:
+        hull.mass = 0.0
+        hull.density = 0.0
+    return hull
+
+
+def _beams(mount, spec, base, beam_names):
+    """The drive's beams added to the base, or the file's rangefinders in the mount's
+    order."""
+    import mujoco
+
+    import models
     if mount.beams[0] == "add":
-        count, first, step = BEAMS[drive]
+        count, first, step = BEAMS[mount.drive]
         for i in range(count):
             angle = math.radians(first + i * step)
             site = base.add_site(name=f"range_{i}", pos=[0, 0, mount.beams[1]],
@@ -421,46 +541,68 @@ def robot_spec(mount):
         for name in beam_names:
             _rangefinder(spec, name, sites[name])
 
-    # -- the drive's actuators ----------------------------------------------------
+
+def _drive_actuators(mount, spec, base, names):
+    """The actuators of the mount's action kind (an "actuators" action uses the file's,
+    named in _drop)."""
+    kind = mount.action[0]
     if kind == "servos":
-        base.add_site(name="drive")
-        # two_wheel.xml's servos: kv is set at load time (tasks.two_wheel.Physics)
-        _actuator(spec, "forward", mujoco.mjtTrn.mjTRN_SITE, "drive",
-                  [1, 0, 0, 0, 0, 0]).set_to_velocity(kv=1)
-        _actuator(spec, "grip", mujoco.mjtTrn.mjTRN_SITE, "drive",
-                  [0, 1, 0, 0, 0, 0]).set_to_velocity(kv=1)
-        yaw = "yaw" if mount.joints == "planar" else _yaw_joint(mount, base)
-        _actuator(spec, "turn", mujoco.mjtTrn.mjTRN_JOINT, yaw).set_to_velocity(kv=1)
+        _servos(mount, spec, base)
     elif kind == "thrusters":
-        joints = ("x", "y") if mount.joints == "planar" else _slides(mount, base)
-        for role, joint in zip(("thrust_x", "thrust_y"), joints):
-            _actuator(spec, role, mujoco.mjtTrn.mjTRN_JOINT, joint).set_to_motor()
+        _thrusters(mount, spec, base)
     elif kind == "wheels":
-        for role, joint in mount.action[1:]:
-            if spec.joint(joint) is None:
-                _fail(mount, f"action.{role}", f"no joint named {joint!r} in {mount.model}")
-            # diff_drive.xml's integrated-velocity servo (tasks.two_wheel.WheelPhysics)
-            act = _actuator(spec, f"{role}_wheel", mujoco.mjtTrn.mjTRN_JOINT, joint)
-            gains = dict(mount.gait)
-            act.set_to_intvelocity(kp=gains["kp"], kv=gains["kv"])
-            act.forcerange = [-gains["force"], gains["force"]]
-            act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
-            act.actrange, act.actlimited = [-1e6, 1e6], mujoco.mjtLimited.mjLIMITED_TRUE
+        _wheels(mount, spec)
     elif kind == "gait":
         _check_gait(mount, spec)
         names.update((role, name) for role, name in mount.action[1:] if role != name)
 
-    # -- options ------------------------------------------------------------------
+
+def _servos(mount, spec, base):
+    """two_wheel.xml's servos: kv is set at load time (tasks.two_wheel.Physics)."""
+    import mujoco
+    base.add_site(name="drive")
+    _actuator(spec, "forward", mujoco.mjtTrn.mjTRN_SITE, "drive",
+              [1, 0, 0, 0, 0, 0]).set_to_velocity(kv=1)
+    _actuator(spec, "grip", mujoco.mjtTrn.mjTRN_SITE, "drive",
+              [0, 1, 0, 0, 0, 0]).set_to_velocity(kv=1)
+    yaw = "yaw" if mount.joints == "planar" else _yaw_joint(mount, base)
+    _actuator(spec, "turn", mujoco.mjtTrn.mjTRN_JOINT, yaw).set_to_velocity(kv=1)
+
+
+def _thrusters(mount, spec, base):
+    """The floating drive's motors on the base's slides x and y."""
+    import mujoco
+    joints = ("x", "y") if mount.joints == "planar" else _slides(mount, base)
+    for role, joint in zip(("thrust_x", "thrust_y"), joints):
+        _actuator(spec, role, mujoco.mjtTrn.mjTRN_JOINT, joint).set_to_motor()
+
+
+def _wheels(mount, spec):
+    """diff_drive.xml's integrated-velocity servos on the file's wheel joints
+    (tasks.two_wheel.WheelPhysics)."""
+    import mujoco
+    for role, joint in mount.action[1:]:
+        if spec.joint(joint) is None:
+            _fail(mount, f"action.{role}", f"no joint named {joint!r} in {mount.model}")
+        act = _actuator(spec, f"{role}_wheel", mujoco.mjtTrn.mjTRN_JOINT, joint)
+        gains = dict(mount.gait)
+        act.set_to_intvelocity(kp=gains["kp"], kv=gains["kv"])
+        act.forcerange = [-gains["force"], gains["force"]]
+        act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+        act.actrange, act.actlimited = [-1e6, 1e6], mujoco.mjtLimited.mjLIMITED_TRUE
+
+
+def _options(mount, spec):
+    """The room's flags (unless the mount keeps the file's) and gravity."""
+    import mujoco
+
+    import models
     room = mujoco.MjSpec.from_file(str(models.ROOM_FILE))
     keep = set(mount.keep_options)
     if "flags" not in keep:
         spec.option.disableflags = room.option.disableflags
         spec.option.enableflags = room.option.enableflags
     spec.option.gravity = room.option.gravity
-    if names:
-        spec.add_text(name=models.NAMES_TEXT,
-                      data=" ".join(f"{k}={v}" for k, v in sorted(names.items())))
-    return spec
 
 
 # What a mount adds is set in full here: the file's <default> would otherwise reach it

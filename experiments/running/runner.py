@@ -308,72 +308,100 @@ def _run_ray(specs, workers, done):
     lost run again) and then recorded as WorkerDied. A cluster that stops answering
     for CLUSTER_TIMEOUT seconds raises ClusterLost: the runs written so far stay on disk,
     the others are unfinished and the same command resumes them."""
+    ray = _import_ray()
+    started_here = not ray.is_initialized()
+    if started_here:
+        _init_ray(ray, workers)
+    watch = _Watch(_gcs_address(ray))
+    try:
+        remote = ray.remote(num_cpus=1, max_retries=1)(_execute)
+        refs = {remote.remote(s): s for s in specs}
+        waiting, watch.answered = list(refs), time.monotonic()
+        while waiting:
+            ready, waiting = ray.wait(waiting, num_returns=1, timeout=1.0)
+            if not ready:
+                watch.check()
+                continue
+            _record_ray(ray, ready[0], refs[ready[0]], done, watch)
+            watch.written += 1
+    finally:
+        if started_here and not watch.lost:  # ray.shutdown would wait on a lost cluster
+            ray.shutdown()
+
+
+def _import_ray():
+    """The ray module (with ray.exceptions), or SystemExit saying how to install it."""
     try:
         import ray
         import ray.exceptions
     except ImportError:
         raise SystemExit("error: --backend ray needs Ray: pip install -e '.[ray]'") from None
-    started_here = not ray.is_initialized()
-    if started_here:
-        address = os.environ.get("RAY_ADDRESS") or None
-        # The test-only hooks travel to workers that a cluster started elsewhere runs.
-        env = dict(_SINGLE_THREAD, **{k: os.environ[k] for k in (TEST_FAIL, TEST_CRASH)
-                                      if os.environ.get(k)})
-        kwargs = {"address": address, "include_dashboard": False, "log_to_driver": False,
-                  "logging_level": logging.WARNING, "runtime_env": {"env_vars": env}}
-        if address is None:
-            kwargs["num_cpus"] = workers or os.cpu_count() or 1
-        ray.init(**kwargs)
+    return ray
+
+
+def _init_ray(ray, workers):
+    """Connects to the cluster at RAY_ADDRESS, or starts one here with `workers` CPUs."""
+    address = os.environ.get("RAY_ADDRESS") or None
+    # The test-only hooks travel to workers that a cluster started elsewhere runs.
+    env = dict(_SINGLE_THREAD, **{k: os.environ[k] for k in (TEST_FAIL, TEST_CRASH)
+                                  if os.environ.get(k)})
+    kwargs = {"address": address, "include_dashboard": False, "log_to_driver": False,
+              "logging_level": logging.WARNING, "runtime_env": {"env_vars": env}}
+    if address is None:
+        kwargs["num_cpus"] = workers or os.cpu_count() or 1
+    ray.init(**kwargs)
+
+
+def _gcs_address(ray):
+    """The cluster's GCS address ("host:port"), or None for a Ray Client connection."""
     try:
-        gcs = ray.get_runtime_context().gcs_address
+        return ray.get_runtime_context().gcs_address
     except Exception:  # a Ray Client connection (ray://): its own errors tell a loss
-        gcs = None
+        return None
+
+
+class _Watch:
+    """Whether the Ray cluster at gcs still answers: when it last did (.answered), the
+    runs written since the start (.written), and whether it counts as lost (.lost)."""
+
+    def __init__(self, gcs):
+        self.gcs, self.written, self.lost = gcs, 0, False
+        self.answered = time.monotonic()
+
+    def check(self):
+        """Raises ClusterLost once the cluster has not answered since .answered for
+        CLUSTER_TIMEOUT seconds; .answered becomes now if it answers."""
+        if _answers(self.gcs):
+            self.answered = time.monotonic()
+            return
+        if time.monotonic() - self.answered < CLUSTER_TIMEOUT:
+            return
+        self.lost = True
+        raise ClusterLost(f"lost the connection to the Ray cluster at {self.gcs} (no answer "
+                          f"for {CLUSTER_TIMEOUT:.0f} s); the {self.written} runs written are "
+                          "on disk; rerun the same command when the cluster is back")
+
+
+def _record_ray(ray, ref, spec, done, watch):
+    """Records the finished task ref of spec's run: its result, its error, or WorkerDied
+    when its worker died (raises the error when the cluster went with it)."""
     died = (ray.exceptions.WorkerCrashedError, ray.exceptions.OutOfMemoryError,
             ray.exceptions.NodeDiedError)
-    written, lost = 0, False
-
-    def check(silent_since):
-        """Raises ClusterLost once the cluster has not answered since silent_since for
-        CLUSTER_TIMEOUT seconds; returns when it last answered (now, if it does)."""
-        nonlocal lost
-        if _answers(gcs):
-            return time.monotonic()
-        if time.monotonic() - silent_since < CLUSTER_TIMEOUT:
-            return silent_since
-        lost = True
-        raise ClusterLost(f"lost the connection to the Ray cluster at {gcs} (no answer for "
-                          f"{CLUSTER_TIMEOUT:.0f} s); the {written} runs written are on disk; "
-                          "rerun the same command when the cluster is back")
-
     try:
-        remote = ray.remote(num_cpus=1, max_retries=1)(_execute)
-        refs = {remote.remote(s): s for s in specs}
-        waiting, answered = list(refs), time.monotonic()
-        while waiting:
-            ready, waiting = ray.wait(waiting, num_returns=1, timeout=1.0)
-            if not ready:
-                answered = check(answered)
-                continue
-            spec = refs[ready[0]]
-            try:
-                result = ray.get(ready[0])
-            except ray.exceptions.RayTaskError as e:  # the run raised: its error as .cause
-                done(spec, error=e)
-            except died + (ray.exceptions.RayError,) as e:
-                # A worker that died, unless the whole cluster went with it.
-                while not _answers(gcs):
-                    answered = check(answered)
-                    time.sleep(0.5)
-                if not isinstance(e, died):
-                    raise
-                done(spec, error=WorkerDied(f"the Ray worker running {spec.name} died "
-                                            f"({results.error_line(e, 200)})"))
-            else:
-                done(spec, result)
-            written += 1
-    finally:
-        if started_here and not lost:  # ray.shutdown would wait on a lost cluster
-            ray.shutdown()
+        result = ray.get(ref)
+    except ray.exceptions.RayTaskError as e:  # the run raised: its error as .cause
+        done(spec, error=e)
+    except died + (ray.exceptions.RayError,) as e:
+        # A worker that died, unless the whole cluster went with it.
+        while not _answers(watch.gcs):
+            watch.check()
+            time.sleep(0.5)
+        if not isinstance(e, died):
+            raise
+        done(spec, error=WorkerDied(f"the Ray worker running {spec.name} died "
+                                    f"({results.error_line(e, 200)})"))
+    else:
+        done(spec, result)
 
 
 def _answers(address, timeout=2.0):
