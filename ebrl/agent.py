@@ -123,32 +123,18 @@ class Agent:
         self._action = self.memory.action
 
     # -- read-outs -----------------------------------------------------------------
-    @property
-    def size(self):
-        return kernels.counters(self.record)[0]
+    def _counter(index, doc):
+        """A read-only property of the record's counter `index` (kernels.counters)."""
+        return property(lambda self: kernels.counters(self.record)[index], doc=doc)
 
-    @property
-    def tail(self):
-        """The current episode's latest element (-1: none)."""
-        return kernels.counters(self.record)[1]
-
-    @property
-    def referred(self):
-        """The trial's latest element used for a memory decision (eq 7's start; -1: none)."""
-        return kernels.counters(self.record)[2]
-
-    @property
-    def steps(self):
-        """Steps learnt so far."""
-        return kernels.counters(self.record)[3]
-
-    @property
-    def memory_decisions(self):
-        return kernels.counters(self.record)[4]
-
-    @property
-    def fallback_decisions(self):
-        return kernels.counters(self.record)[5]
+    size = _counter(0, "Stored memory elements.")
+    tail = _counter(1, "The current episode's latest element (-1: none).")
+    referred = _counter(2, "The trial's latest element used for a memory decision (eq 7's "
+                           "start; -1: none).")
+    steps = _counter(3, "Steps learnt so far.")
+    memory_decisions = _counter(4, "Actions the memory chose (eq 5).")
+    fallback_decisions = _counter(5, "Actions the fallback chose.")
+    del _counter
 
     @property
     def decision(self):
