@@ -170,10 +170,21 @@ class FallbackRecord(structref.StructRefProxy):
     without hold), scratch for the random action, who chose its last action (RANDOM or
     INTRINSIC, -1 before any), and the random stream its Python calls draw from."""
 
+    def __new__(cls, *args):
+        # numba's own constructor (StructRefProxy.__new__) compiles in every
+        # process; this one is cached on disk, as the kernels are
+        return _new_fallback_record(*args)
+
 
 FALLBACK_FIELDS = ("kind", "rate", "sd", "uniform", "add", "theta", "last", "random", "choice",
                    "rng")
 structref.define_proxy(FallbackRecord, FallbackStateType, list(FALLBACK_FIELDS))
+
+
+@njit(cache=True)
+def _new_fallback_record(*args):
+    """FallbackRecord(*args), compiled once and cached (its __new__)."""
+    return FallbackRecord(*args)
 
 
 @njit(cache=True)

@@ -317,6 +317,11 @@ class AgentRecord(structref.StructRefProxy):
     (experiments.running.fused) iterates the same functions on the same record. Python
     reads its counters through `counters`; its arrays are the caller's own (shared)."""
 
+    def __new__(cls, *args):
+        # numba's own constructor (StructRefProxy.__new__) compiles in every
+        # process; this one is cached on disk, as the kernels are
+        return _new_agent_record(*args)
+
 
 #: The record's fields, in the constructor's order.
 AGENT_FIELDS = (
@@ -338,6 +343,14 @@ AGENT_FIELDS = (
     "size", "tail", "referred", "steps", "memory_decisions", "fallback_decisions", "decider",
 )
 structref.define_proxy(AgentRecord, AgentStateType, list(AGENT_FIELDS))
+
+
+@njit(cache=True)
+def _new_agent_record(*args):
+    """AgentRecord(*args), compiled once and cached (its __new__)."""
+    return AgentRecord(*args)
+
+
 #: The record's arrays, in order (AGENT_FIELDS from "group_of" to "action").
 AGENT_ARRAYS = AGENT_FIELDS[AGENT_FIELDS.index("group_of"): AGENT_FIELDS.index("pending")]
 

@@ -262,6 +262,11 @@ class Drive(structref.StructRefProxy):
     robot's parts and the drive's settings (SETTINGS, ints then floats). Built by
     navigation.Physics.drive_record; the fields are documented in SETTINGS."""
 
+    def __new__(cls, *args):
+        # numba's own constructor (StructRefProxy.__new__) compiles in every
+        # process; this one is cached on disk, as the kernels are
+        return _new_drive(*args)
+
 
 #: MuJoCo's structs and arrays the kernels touch: the model and data addresses, the
 #: disable flags and the bad-acceleration warning count (int32 views), MuJoCo's own
@@ -322,6 +327,12 @@ SETTINGS = {
 #: The settings that are ints (the rest are floats).
 INT_SETTINGS = tuple(SETTINGS)[:tuple(SETTINGS).index("unit")]
 structref.define_proxy(Drive, DriveType, list(HANDLES) + list(SETTINGS))
+
+
+@njit(cache=True)
+def _new_drive(*args):
+    """Drive(*args), compiled once and cached (its __new__)."""
+    return Drive(*args)
 
 
 def drive_record(handles, settings):
@@ -694,8 +705,19 @@ class Stream(structref.StructRefProxy):
     """A stretch of the task's RandomState as doubles: the buffer, the next double's
     index, and legacy_gauss's cached value (has_gauss, gauss)."""
 
+    def __new__(cls, *args):
+        # numba's own constructor (StructRefProxy.__new__) compiles in every
+        # process; this one is cached on disk, as the kernels are
+        return _new_stream(*args)
+
 
 structref.define_proxy(Stream, StreamType, ["buffer", "cursor", "has_gauss", "gauss"])
+
+
+@njit(cache=True)
+def _new_stream(*args):
+    """Stream(*args), compiled once and cached (its __new__)."""
+    return Stream(*args)
 
 
 @njit(cache=True)
