@@ -114,8 +114,7 @@ class TwoWheel(navigation.Navigation):
         physics.begin_turn(turn, self._n_turn)
         physics.step(self._n_turn)
         if self.config.blocked_move == "refuse":  # the state a refused move returns to
-            data = physics.data.ptr
-            self._saved = (data.qpos.copy(), data.qvel.copy(), data.act.copy())
+            self._saved = physics.saved_state()
         x, y, heading = physics.robot_pose()
         self._from = (x, y, math.cos(heading), math.sin(heading))
         # The environment then runs the move phase (move_substeps).
@@ -131,7 +130,7 @@ class TwoWheel(navigation.Navigation):
                 sign = kernels.away_sign(physics.ranges(), sign)
             if self.config.blocked_move == "refuse":
                 data = physics.data.ptr
-                data.qpos[:], data.qvel[:], data.act[:] = self._saved
+                physics.restore_state(self._saved)
                 before = data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number
                 mujoco.mj_forward(physics.model.ptr, data)
                 if data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number != before:
@@ -149,39 +148,25 @@ def move_substeps(timestep, time_scale=1.0):
     return navigation.substeps(MOVE_SECONDS * time_scale, timestep)
 
 
-class WheelPhysics(navigation.Physics):
-    """Two wheel hinges, ``left_wheel`` and ``right_wheel``, each under an
-    integrated-velocity servo: the control is the wheel's speed, the servo's target
-    angle integrates it and a PD loop on the wheel's angle follows. A phase of n
-    substeps sets the speeds that turn the wheels by the phase's angle in its first
-    RAMP share of the substeps; the rest lets the wheels settle on their targets. No
-    Python runs between phase boundaries."""
+class WheelPlan(navigation.Physics):
+    """The wheel-angle plan of two wheel hinges rolling on the floor: a phase of n
+    substeps turns the wheels by the phase's angles (a turn: opposite, a move: alike)
+    in its first RAMP share of the substeps, then lets them settle on their targets;
+    `halt` gives up the rest where the wheels are. WheelPhysics executes it through
+    servos added on the wheels."""
 
     #: Share of a phase over which the wheel targets move; the rest is for settling.
     RAMP = 0.5
 
-    def _reload_from_data(self, data):
-        super()._reload_from_data(data)
+    def _wheel_geometry(self, joints):
+        """The wheel radius and half the track, from the two wheel hinges (joint ids):
+        each wheel body's first geom, the bodies' y positions."""
         m = self.model
-        ids = [navigation.named_id(m, navigation.mujoco.mjtObj.mjOBJ_ACTUATOR, name)
-               for name in ("left_wheel", "right_wheel")]
-        if min(ids) < 0:
-            raise navigation.ContractError(MISSING_ACTUATORS)
-        joints = [int(m.actuator_trnid[i, 0]) for i in ids]
         bodies = [int(m.jnt_bodyid[j]) for j in joints]
         geoms = [int(np.flatnonzero(m.geom_bodyid == b)[0]) for b in bodies]
-        self._wheel_ctrl = ids
-        self._wheel_act = [int(m.actuator_actadr[i]) for i in ids]
-        self._wheel_qpos = [int(m.jnt_qposadr[j]) for j in joints]
         #: Wheel radius (m) and half the track, the wheels' distance apart / 2 (m).
         self.wheel_radius = float(m.geom_size[geoms[0], 0])
         self.half_track = float(abs(m.body_pos[bodies[0], 1] - m.body_pos[bodies[1], 1]) / 2)
-        self._ramp_left = 0  # substeps left of the current phase's ramp
-        self._settings.update(
-            wheels=1, act0=ids[0], act1=ids[1], act_adr0=self._wheel_act[0],
-            act_adr1=self._wheel_act[1], wheel_q0=self._wheel_qpos[0],
-            wheel_q1=self._wheel_qpos[1], half_track=self.half_track,
-            wheel_radius=self.wheel_radius)
 
     def ramp_substeps(self, n):
         """The substeps of an n-substep phase over which the wheels' targets move."""
@@ -189,11 +174,7 @@ class WheelPhysics(navigation.Physics):
 
     def _wheel_speeds(self, left, right, n):
         """Turns the wheels by (left, right) rad over the ramp of an n-substep phase."""
-        ramp = self.ramp_substeps(n)
-        self._ramp_left = ramp
-        ctrl = self._ctrl
-        ctrl[self._wheel_ctrl[0]] = left / (ramp * self.timestep)
-        ctrl[self._wheel_ctrl[1]] = right / (ramp * self.timestep)
+        raise NotImplementedError
 
     def begin_turn(self, angle, n):
         """Turns by `angle` rad (counter-clockwise) over an n-substep phase."""
@@ -204,6 +185,42 @@ class WheelPhysics(navigation.Physics):
         """Moves `distance` units forward over an n-substep phase."""
         w = distance * self.unit / self.wheel_radius
         self._wheel_speeds(w, w, n)
+
+
+class WheelPhysics(WheelPlan):
+    """Two wheel hinges, ``left_wheel`` and ``right_wheel``, each under an
+    integrated-velocity servo: the control is the wheel's speed, the servo's target
+    angle integrates it and a PD loop on the wheel's angle follows. A phase of n
+    substeps sets the speeds that turn the wheels by the phase's angle in its first
+    RAMP share of the substeps; the rest lets the wheels settle on their targets. No
+    Python runs between phase boundaries."""
+
+    def _reload_from_data(self, data):
+        super()._reload_from_data(data)
+        m = self.model
+        ids = [navigation.named_id(m, navigation.mujoco.mjtObj.mjOBJ_ACTUATOR, name)
+               for name in ("left_wheel", "right_wheel")]
+        if min(ids) < 0:
+            raise navigation.ContractError(MISSING_ACTUATORS)
+        joints = [int(m.actuator_trnid[i, 0]) for i in ids]
+        self._wheel_geometry(joints)
+        self._wheel_ctrl = ids
+        self._wheel_act = [int(m.actuator_actadr[i]) for i in ids]
+        self._wheel_qpos = [int(m.jnt_qposadr[j]) for j in joints]
+        self._ramp_left = 0  # substeps left of the current phase's ramp
+        self._settings.update(
+            wheels=1, act0=ids[0], act1=ids[1], act_adr0=self._wheel_act[0],
+            act_adr1=self._wheel_act[1], wheel_q0=self._wheel_qpos[0],
+            wheel_q1=self._wheel_qpos[1], half_track=self.half_track,
+            wheel_radius=self.wheel_radius)
+
+    def _wheel_speeds(self, left, right, n):
+        """Turns the wheels by (left, right) rad over the ramp of an n-substep phase."""
+        ramp = self.ramp_substeps(n)
+        self._ramp_left = ramp
+        ctrl = self._ctrl
+        ctrl[self._wheel_ctrl[0]] = left / (ramp * self.timestep)
+        ctrl[self._wheel_ctrl[1]] = right / (ramp * self.timestep)
 
     def step(self, nstep=1):
         """Steps through the phase: the ramp, then the wheels settle at rest targets."""
@@ -224,3 +241,4 @@ class WheelPhysics(navigation.Physics):
             ctrl[c] = 0.0
             act[a] = q[j]
         self._ramp_left = 0
+
