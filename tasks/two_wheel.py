@@ -19,7 +19,7 @@ import math
 import mujoco
 import numpy as np
 
-from tasks import kernels, navigation
+from tasks import kernels, navigation, wheel_kernels
 from tasks.config import BLOCKED_MOVES, LEFTOVER_TURNS
 
 MAX_TURN = 1.0  # rad per step
@@ -153,7 +153,7 @@ class WheelPlan(navigation.Physics):
     substeps turns the wheels by the phase's angles (a turn: opposite, a move: alike)
     in its first RAMP share of the substeps, then lets them settle on their targets;
     `halt` gives up the rest where the wheels are. WheelPhysics executes it through
-    servos added on the wheels."""
+    servos added on the wheels, MotorWheelPhysics through the file's own motors."""
 
     #: Share of a phase over which the wheel targets move; the rest is for settling.
     RAMP = 0.5
@@ -242,3 +242,132 @@ class WheelPhysics(WheelPlan):
             act[a] = q[j]
         self._ramp_left = 0
 
+
+#: A wheel_motors mount's roles (tasks.mount): the file's wheel hinges, and its motors
+#: by contract name motor_0, motor_1, ...
+WHEEL_JOINTS = ("left", "right")
+MOTOR_ROLE = "motor_{}"
+#: The control each motor is probed with at load, to measure its generalised force per
+#: unit control on the wheels (small, so no joint's actuatorfrcrange clips it).
+PROBE = 1e-3
+
+
+class MotorWheelPhysics(WheelPlan):
+    """Two wheel hinges (contract names ``left``, ``right``) turned through the file's
+    own motors (``motor_0``, ``motor_1``, ...: torque motors on the wheel joints or on
+    tendons over them), none added. The wheel-angle plan is WheelPlan's, its targets
+    held here: at every substep the desired wheel torques are
+    tau = kp (target - q) - kv dq, and the motors' controls that give them
+    (tasks.wheel_kernels.motor_controls, clipped to each motor's range); one compiled
+    call (tasks.wheel_kernels.wheel_phase) per phase. The kernels' compiled step does
+    not drive it (hooks_only): the Environment runs the hooks."""
+
+    hooks_only = True
+    #: Set by motor_wheel_physics from the mount: its motors' count and the PD gains
+    #: (N m per rad, N m s per rad).
+    motor_count = 2
+    kp = 0.0
+    kv = 0.0
+
+    def _reload_from_data(self, data):
+        super()._reload_from_data(data)
+        m = self.model
+        mjm = m.ptr
+        joints = [navigation.named_id(m, mujoco.mjtObj.mjOBJ_JOINT, role) for role in WHEEL_JOINTS]
+        motors = [navigation.named_id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, MOTOR_ROLE.format(k))
+                  for k in range(self.motor_count)]
+        if min(joints) < 0 or min(motors) < 0:
+            raise navigation.ContractError(
+                "wheel motors need hinges 'left' and 'right' and the motors "
+                + ", ".join(repr(MOTOR_ROLE.format(k)) for k in range(self.motor_count)))
+        self._wheel_geometry(joints)
+        self._wheel_q = mjm.jnt_qposadr[joints].astype(np.int64)
+        self._wheel_dof = mjm.jnt_dofadr[joints].astype(np.int64)
+        self._motors = np.array(motors, dtype=np.int64)
+        self._ctrl_lo = mjm.actuator_ctrlrange[motors, 0].copy()
+        self._ctrl_hi = mjm.actuator_ctrlrange[motors, 1].copy()
+        unlimited = ~mjm.actuator_ctrllimited[motors].astype(bool)
+        self._ctrl_lo[unlimited], self._ctrl_hi[unlimited] = -np.inf, np.inf
+        self.motor_gains = motor_gains(mjm, self._motors, self._wheel_dof)
+        g = self.motor_gains
+        gram = g.T @ g
+        if abs(np.linalg.det(gram)) <= 1e-12 * max(1e-300, np.trace(gram)) ** 2:
+            raise navigation.ContractError(
+                "action.motors: the motors do not turn the two wheels independently "
+                f"(force per unit control on the wheels: {g.tolist()})")
+        #: The plan's state: the wheels' targets (rad), their step per substep of the
+        #: ramp and the ramp's substeps left; the kernel's scratch (torques, controls).
+        self._target = np.zeros(2)
+        self._delta = np.zeros(2)
+        self._ramp_left = np.zeros(1, dtype=np.int64)
+        self._tau = np.zeros(2)
+        self._c = np.zeros(self.motor_count)
+
+    def set_drive(self, **settings):
+        """Keeps the settings but builds no kernels' record: no compiled step drives
+        these motors (hooks_only)."""
+        self._settings.update(settings)
+        self.record = None
+        return None
+
+    def _wheel_speeds(self, left, right, n):
+        """The targets move by (left, right) rad over the ramp of an n-substep phase."""
+        ramp = self.ramp_substeps(n)
+        self._ramp_left[0] = ramp
+        self._delta[0], self._delta[1] = left / ramp, right / ramp
+
+    def step(self, nstep=1):
+        """nstep substeps of the phase, the PD loop on the motors at each."""
+        status = wheel_kernels.wheel_phase(
+            self._m, self._d, nstep, self._bad_qacc, self._xmat, self._free is not None,
+            self._min_cos_tilt, self._qpos, self._qvel, self._ctrl, self._wheel_q,
+            self._wheel_dof, self._motors, self.motor_gains, self._ctrl_lo, self._ctrl_hi,
+            self.kp, self.kv, self._target, self._delta, self._ramp_left, self._tau, self._c)
+        self.substeps += nstep
+        if status != kernels.OK:
+            self.raise_for(status)
+
+    def halt(self):
+        """The targets where the wheels are: a stalled wheel gives up the rest."""
+        self._target[:] = self._qpos[self._wheel_q]
+        self._ramp_left[0] = 0
+
+    def set_robot_pose(self, x, y, heading=0.0):
+        super().set_robot_pose(x, y, heading)
+        self.halt()
+
+    def saved_state(self):
+        return super().saved_state() + (self._target.copy(), self._ramp_left.copy())
+
+    def restore_state(self, saved):
+        super().restore_state(saved[:-2])
+        self._target[:], self._ramp_left[:] = saved[-2:]
+
+
+def motor_gains(model, motors, dofs):
+    """gains[k, j]: motor k's generalised force on dof j per unit of its control, measured
+    on a scratch MjData at the model's rest pose (qfrc_actuator with motor k's control at
+    PROBE and the others 0, less with all 0, over PROBE; control clamping off meanwhile)."""
+    d = mujoco.MjData(model)
+    flags = model.opt.disableflags
+    model.opt.disableflags = flags | int(mujoco.mjtDisableBit.mjDSBL_CLAMPCTRL)
+    try:
+        mujoco.mj_forward(model, d)
+        rest = d.qfrc_actuator[dofs].copy()
+        gains = np.zeros((len(motors), len(dofs)))
+        for k, a in enumerate(motors):
+            d.ctrl[:] = 0.0
+            d.ctrl[a] = PROBE
+            mujoco.mj_forward(model, d)
+            gains[k] = (d.qfrc_actuator[dofs] - rest) / PROBE
+    finally:
+        model.opt.disableflags = flags
+    return gains
+
+
+def motor_wheel_physics(mount):
+    """MotorWheelPhysics with a wheel_motors mount's motor count and gains."""
+    gains = dict(mount.gait)
+    motors = [name for role, name in mount.action[1:] if role not in WHEEL_JOINTS]
+    return type("MotorWheelPhysics", (MotorWheelPhysics,),
+                {"motor_count": len(motors), "kp": gains["kp"], "kv": gains["kv"]})
