@@ -13,6 +13,11 @@ Two ways to realise it, picked by the robot file's actuators (docs/adding_a_robo
   drive the speed along the heading and the yaw rate directly (`two_wheel`).
 - `WheelPhysics`: two wheel hinges ``left_wheel`` and ``right_wheel`` rolling on the
   floor, under position servos whose targets follow the turn or the move (`diff_drive`).
+A mount (tasks.mount) may instead name a file's wheel hinges and its own motors
+(action kind "wheel_motors"):
+- `MotorWheelPhysics`: the same wheel-angle plan (`WheelPlan`), its targets followed by
+  a PD loop solved for the file's motors' controls at every substep, on the hooks only
+  (the MuJoCo car, models/mounts/car.toml).
 """
 import math
 
