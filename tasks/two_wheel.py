@@ -293,9 +293,9 @@ class MotorWheelPhysics(WheelPlan):
         self._ctrl_hi = mjm.actuator_ctrlrange[motors, 1].copy()
         unlimited = ~mjm.actuator_ctrllimited[motors].astype(bool)
         self._ctrl_lo[unlimited], self._ctrl_hi[unlimited] = -np.inf, np.inf
-        self.motor_gains = motor_gains(mjm, self._motors, self._wheel_dof)
-        g = self.motor_gains
-        gram = g.T @ g
+        self.motor_forces = motor_forces(mjm, self._motors, self._wheel_dof)
+        g = self.motor_forces
+        gram = g.T @ g   # motor_controls inverts it
         if abs(np.linalg.det(gram)) <= 1e-12 * max(1e-300, np.trace(gram)) ** 2:
             raise navigation.ContractError(
                 "action.motors: the motors do not turn the two wheels independently "
@@ -326,7 +326,7 @@ class MotorWheelPhysics(WheelPlan):
         status = wheel_kernels.wheel_phase(
             self._m, self._d, nstep, self._bad_qacc, self._xmat, self._free is not None,
             self._min_cos_tilt, self._qpos, self._qvel, self._ctrl, self._wheel_q,
-            self._wheel_dof, self._motors, self.motor_gains, self._ctrl_lo, self._ctrl_hi,
+            self._wheel_dof, self._motors, self.motor_forces, self._ctrl_lo, self._ctrl_hi,
             self.kp, self.kv, self._target, self._delta, self._ramp_left, self._tau, self._c)
         self.substeps += nstep
         if status != kernels.OK:
@@ -349,8 +349,8 @@ class MotorWheelPhysics(WheelPlan):
         self._target[:], self._ramp_left[:] = saved[-2:]
 
 
-def motor_gains(model, motors, dofs):
-    """gains[k, j]: motor k's generalised force on dof j per unit of its control, measured
+def motor_forces(model, motors, dofs):
+    """forces[k, j]: motor k's generalised force on dof j per unit of its control, measured
     on a scratch MjData at the model's rest pose (qfrc_actuator with motor k's control at
     PROBE and the others 0, less with all 0, over PROBE; control clamping off meanwhile)."""
     d = mujoco.MjData(model)
@@ -359,15 +359,15 @@ def motor_gains(model, motors, dofs):
     try:
         mujoco.mj_forward(model, d)
         rest = d.qfrc_actuator[dofs].copy()
-        gains = np.zeros((len(motors), len(dofs)))
+        forces = np.zeros((len(motors), len(dofs)))
         for k, a in enumerate(motors):
             d.ctrl[:] = 0.0
             d.ctrl[a] = PROBE
             mujoco.mj_forward(model, d)
-            gains[k] = (d.qfrc_actuator[dofs] - rest) / PROBE
+            forces[k] = (d.qfrc_actuator[dofs] - rest) / PROBE
     finally:
         model.opt.disableflags = flags
-    return gains
+    return forces
 
 
 def motor_wheel_physics(mount):

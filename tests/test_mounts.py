@@ -310,7 +310,7 @@ def test_the_car_runs_through_its_own_motors_and_adds_no_actuator():
             assert np.array_equal(getattr(m, field), getattr(own, field)), field
         physics = env.physics
         assert isinstance(physics, two_wheel.MotorWheelPhysics) and not env.steps_compiled
-        assert np.allclose(physics.motor_gains, [[0.5, 0.5], [-0.5, 0.5]], atol=1e-12)
+        assert np.allclose(physics.motor_forces, [[0.5, 0.5], [-0.5, 0.5]], atol=1e-12)
         assert (physics.kp, physics.kv) == (0.2, 0.01)
     finally:
         env.close()
