@@ -43,8 +43,10 @@ class Environment(control.Environment):
 
     @property
     def steps_compiled(self):
-        """True when step() runs the task's compiled step (tasks.kernels.step)."""
-        return self.compiled and not self._flat_observation and self._task.kind is not None
+        """True when step() runs the task's compiled step (tasks.kernels.step): a drive
+        with one, on a physics it can drive (not navigation.Physics.hooks_only)."""
+        return (self.compiled and not self._flat_observation and self._task.kind is not None
+                and not self._physics.hooks_only)
 
     def step(self, action):
         if self._reset_next_step or not self.steps_compiled:

@@ -25,7 +25,8 @@ tasks.navigation reads, so a mounted model is as self-describing as a contract f
     [beams]                             # height = 0.5 (added, the drive's arrangement), or
     height = 0.5                        # sensors = [the file's rangefinders, in order]
     [action]
-    kind = "servos"                     # servos, actuators, wheels, thrusters, gait
+    kind = "servos"                     # servos, actuators, wheels, wheel_motors,
+                                        # thrusters, gait
     [readings]                          # TaskConfig or agent fields (Robot.readings)
 
 Every error is one line, ``<mount file>: <field>: <what is wrong>`` (MountError).
@@ -45,7 +46,7 @@ JOINTS = ("file", "free", "planar")
 DROPS = ("world", "lights", "skybox", "cameras", "actuators", "tendons", "sensors")
 OPTIONS = ("timestep", "integrator", "flags")
 #: How the drive's action reaches the robot, by drive.
-ACTIONS = {"two_wheel": ("servos", "actuators", "wheels", "gait"),
+ACTIONS = {"two_wheel": ("servos", "actuators", "wheels", "wheel_motors", "gait"),
            "floating": ("thrusters", "actuators")}
 #: The contract's actuator names an "actuators" action maps, by drive.
 ACTUATOR_ROLES = {"two_wheel": ("forward", "turn", "grip"), "floating": ("thrust_x", "thrust_y")}
@@ -60,7 +61,7 @@ _TOP = {"name", "description", "file", "drive", "unit", "base", "joints", "drop"
 _BUMPER = {"geom", "shape", "radius", "height", "half_length"}
 _BEAMS = {"height", "sensors"}
 _ACTION = {"kind", "forward", "turn", "grip", "thrust_x", "thrust_y", "left", "right", "gait",
-           "kp", "kv", "force", *(f"{j}_{i}" for j in ("hip", "ankle") for i in range(4))}
+           "kp", "kv", "force", "motors", *(f"{j}_{i}" for j in ("hip", "ankle") for i in range(4))}
 
 
 class MountError(ValueError):
@@ -268,13 +269,20 @@ def _parse_action(fields, data, drive, joints):
         roles = _actuator_roles(fields, action, drive)
     elif kind == "wheels":
         roles, gait = _wheel_roles(fields, action)
+    elif kind == "wheel_motors":
+        roles, gait = _wheel_motor_roles(fields, action)
     elif kind == "gait":
         roles, gait = _gait_roles(fields, action)
-    extra = set(action) - {"kind", "gait"} - {r for r, _ in roles} - {k for k, _ in gait}
+    listed = {"motors"} if kind == "wheel_motors" else set()
+    extra = (set(action) - {"kind", "gait"} - listed - {r for r, _ in roles}
+             - {k for k, _ in gait})
     if extra:
         fail(f"action.{sorted(extra)[0]}", f"not a field of action kind {kind!r}")
     if kind == "servos" and joints == "free":
         fail("action.kind", "servos drive planar joints (joints = file or planar), not a free joint")
+    if kind == "wheel_motors" and joints == "planar":
+        fail("joints", "wheel_motors roll the file's wheels on a free base (joints = file or "
+                       "free); planar replaces the base's joints and drops the file's motors")
     return (kind, *roles), gait
 
 
@@ -298,6 +306,31 @@ def _wheel_roles(fields, action):
     # force the servo's torque limit, N m)
     gains = tuple((k, fields.number(action, k, f"action.{k}", d))
                   for k, d in (("kp", 2.0), ("kv", 0.05), ("force", 0.12)))
+    return roles, gains
+
+
+def _wheel_motor_roles(fields, action):
+    """A "wheel_motors" action's (role, name) pairs, the file's wheel joints ("left",
+    "right") and its motors (tasks.two_wheel.MOTOR_ROLE: "motor_0", ...), and its PD
+    gains (kp N m/rad, kv N m s/rad: required, a robot's own)."""
+    from tasks.two_wheel import MOTOR_ROLE, WHEEL_JOINTS
+    fail = fields.fail
+    for role in WHEEL_JOINTS + ("motors",):
+        if role not in action:
+            fail(f"action.{role}", "missing: the file's wheel joint" if role != "motors" else
+                 "missing: the file's motors that turn the wheels, as a list")
+    motors = fields.names(action, "motors", "action.motors")
+    if len(motors) < 2 or len(set(motors)) != len(motors):
+        fail("action.motors", f"needs two or more different motors of the file, got {list(motors)}")
+    for k in ("kp", "kv"):
+        if k not in action:
+            fail(f"action.{k}", "missing: the PD gain on the wheel angles (a robot's own)")
+    roles = tuple((r, fields.text(action, r, f"action.{r}")) for r in WHEEL_JOINTS)
+    roles += tuple((MOTOR_ROLE.format(k), name) for k, name in enumerate(motors))
+    gains = tuple((k, fields.number(action, k, f"action.{k}", positive=k == "kp"))
+                  for k in ("kp", "kv"))
+    if dict(gains)["kv"] < 0:
+        fail("action.kv", f"must not be negative, got {dict(gains)['kv']!r}")
     return roles, gains
 
 
@@ -397,6 +430,8 @@ def _drop(mount, spec, names):
         drop |= {"actuators"}      # the drive's own actuators replace the file's
     if mount.joints == "planar":
         drop |= {"actuators", "tendons"}   # they may act on the joints replaced
+    if kind == "wheel_motors":
+        _check_wheel_motors(mount, spec, drop)
     if kind == "actuators":
         for role, name in mount.action[1:]:
             if _by_name(spec.actuators, name) is None:
@@ -554,6 +589,7 @@ def _drive_actuators(mount, spec, base, names):
         _wheels(mount, spec)
     elif kind == "gait":
         _check_gait(mount, spec)
+    if kind in ("gait", "wheel_motors"):   # the file's joints and motors, by role
         names.update((role, name) for role, name in mount.action[1:] if role != name)
 
 
@@ -679,6 +715,8 @@ def physics_class(mount):
     if kind == "gait":
         from tasks import gait
         return gait.physics_class(mount)
+    if kind == "wheel_motors":
+        return two_wheel.motor_wheel_physics(mount)
     return two_wheel.WheelPhysics if kind == "wheels" else two_wheel.Physics
 
 
@@ -693,3 +731,31 @@ def _check_gait(mount, spec):
         if _by_name(spec.actuators, name) is None:
             raise MountError(f"{mount.path}: action.{role}: no actuator named {name!r} in "
                              f"{mount.model}")
+
+
+def _check_wheel_motors(mount, spec, drop):
+    """The file's wheel hinges and motors a wheel_motors mount names (before the drop:
+    its motors and their tendons are kept)."""
+    import mujoco
+
+    from tasks.two_wheel import WHEEL_JOINTS
+    if "actuators" in drop:
+        _fail(mount, "drop", "wheel_motors turn the wheels through the file's motors: "
+                             "do not drop its actuators")
+    for role, name in mount.action[1:]:
+        field = f"action.{role}" if role in WHEEL_JOINTS else "action.motors"
+        if role != name and any(ch.isspace() for ch in name):   # models.NAMES_TEXT's pairs
+            _fail(mount, field, f"{name!r}: a name with spaces cannot be mapped")
+        if role in WHEEL_JOINTS:
+            joint = spec.joint(name)
+            if joint is None:
+                _fail(mount, field, f"no joint named {name!r} in {mount.model}")
+            if joint.type != mujoco.mjtJoint.mjJNT_HINGE:
+                _fail(mount, field, f"joint {name!r} is not a hinge (a wheel's joint)")
+            continue
+        motor = _by_name(spec.actuators, name)
+        if motor is None:
+            _fail(mount, field, f"no actuator named {name!r} in {mount.model}")
+        if motor.trntype == mujoco.mjtTrn.mjTRN_TENDON and "tendons" in drop:
+            _fail(mount, "drop", f"motor {name!r} pulls a tendon of the file: do not drop "
+                                 "its tendons")

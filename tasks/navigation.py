@@ -162,6 +162,21 @@ class Physics(dm_mujoco.Physics):
         #: Rangefinders (the sensor noise draws one normal for each).
         self.n_beams = len(adr)
 
+    #: True where the drive's compiled step cannot run this physics (its phases are its
+    #: own: tasks.two_wheel.MotorWheelPhysics): the Environment runs the task's hooks,
+    #: and the fused loop refuses it (tasks.Environment.steps_compiled).
+    hooks_only = False
+
+    def saved_state(self):
+        """What restore_state returns the physics to: qpos, qvel, act (copies)."""
+        data = self._mj[1]
+        return data.qpos.copy(), data.qvel.copy(), data.act.copy()
+
+    def restore_state(self, saved):
+        """Back to a saved_state (the caller runs mj_forward)."""
+        data = self._mj[1]
+        data.qpos[:], data.qvel[:], data.act[:] = saved
+
     def set_drive(self, **settings):
         """Sets some of the drive's settings (tasks.kernels.SETTINGS) and builds the
         kernels' record of them (`record`, a tasks.kernels.Drive)."""

@@ -13,13 +13,18 @@ Two ways to realise it, picked by the robot file's actuators (docs/adding_a_robo
   drive the speed along the heading and the yaw rate directly (`two_wheel`).
 - `WheelPhysics`: two wheel hinges ``left_wheel`` and ``right_wheel`` rolling on the
   floor, under position servos whose targets follow the turn or the move (`diff_drive`).
+A mount (tasks.mount) may instead name a file's wheel hinges and its own motors
+(action kind "wheel_motors"):
+- `MotorWheelPhysics`: the same wheel-angle plan (`WheelPlan`), its targets followed by
+  a PD loop solved for the file's motors' controls at every substep, on the hooks only
+  (the MuJoCo car, models/mounts/car.toml).
 """
 import math
 
 import mujoco
 import numpy as np
 
-from tasks import kernels, navigation
+from tasks import kernels, navigation, wheel_kernels
 from tasks.config import BLOCKED_MOVES, LEFTOVER_TURNS
 
 MAX_TURN = 1.0  # rad per step
@@ -114,8 +119,7 @@ class TwoWheel(navigation.Navigation):
         physics.begin_turn(turn, self._n_turn)
         physics.step(self._n_turn)
         if self.config.blocked_move == "refuse":  # the state a refused move returns to
-            data = physics.data.ptr
-            self._saved = (data.qpos.copy(), data.qvel.copy(), data.act.copy())
+            self._saved = physics.saved_state()
         x, y, heading = physics.robot_pose()
         self._from = (x, y, math.cos(heading), math.sin(heading))
         # The environment then runs the move phase (move_substeps).
@@ -131,7 +135,7 @@ class TwoWheel(navigation.Navigation):
                 sign = kernels.away_sign(physics.ranges(), sign)
             if self.config.blocked_move == "refuse":
                 data = physics.data.ptr
-                data.qpos[:], data.qvel[:], data.act[:] = self._saved
+                physics.restore_state(self._saved)
                 before = data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number
                 mujoco.mj_forward(physics.model.ptr, data)
                 if data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number != before:
@@ -149,39 +153,25 @@ def move_substeps(timestep, time_scale=1.0):
     return navigation.substeps(MOVE_SECONDS * time_scale, timestep)
 
 
-class WheelPhysics(navigation.Physics):
-    """Two wheel hinges, ``left_wheel`` and ``right_wheel``, each under an
-    integrated-velocity servo: the control is the wheel's speed, the servo's target
-    angle integrates it and a PD loop on the wheel's angle follows. A phase of n
-    substeps sets the speeds that turn the wheels by the phase's angle in its first
-    RAMP share of the substeps; the rest lets the wheels settle on their targets. No
-    Python runs between phase boundaries."""
+class WheelPlan(navigation.Physics):
+    """The wheel-angle plan of two wheel hinges rolling on the floor: a phase of n
+    substeps turns the wheels by the phase's angles (a turn: opposite, a move: alike)
+    in its first RAMP share of the substeps, then lets them settle on their targets;
+    `halt` gives up the rest where the wheels are. WheelPhysics executes it through
+    servos added on the wheels, MotorWheelPhysics through the file's own motors."""
 
     #: Share of a phase over which the wheel targets move; the rest is for settling.
     RAMP = 0.5
 
-    def _reload_from_data(self, data):
-        super()._reload_from_data(data)
+    def _wheel_geometry(self, joints):
+        """The wheel radius and half the track, from the two wheel hinges (joint ids):
+        each wheel body's first geom, the bodies' y positions."""
         m = self.model
-        ids = [navigation.named_id(m, navigation.mujoco.mjtObj.mjOBJ_ACTUATOR, name)
-               for name in ("left_wheel", "right_wheel")]
-        if min(ids) < 0:
-            raise navigation.ContractError(MISSING_ACTUATORS)
-        joints = [int(m.actuator_trnid[i, 0]) for i in ids]
         bodies = [int(m.jnt_bodyid[j]) for j in joints]
         geoms = [int(np.flatnonzero(m.geom_bodyid == b)[0]) for b in bodies]
-        self._wheel_ctrl = ids
-        self._wheel_act = [int(m.actuator_actadr[i]) for i in ids]
-        self._wheel_qpos = [int(m.jnt_qposadr[j]) for j in joints]
         #: Wheel radius (m) and half the track, the wheels' distance apart / 2 (m).
         self.wheel_radius = float(m.geom_size[geoms[0], 0])
         self.half_track = float(abs(m.body_pos[bodies[0], 1] - m.body_pos[bodies[1], 1]) / 2)
-        self._ramp_left = 0  # substeps left of the current phase's ramp
-        self._settings.update(
-            wheels=1, act0=ids[0], act1=ids[1], act_adr0=self._wheel_act[0],
-            act_adr1=self._wheel_act[1], wheel_q0=self._wheel_qpos[0],
-            wheel_q1=self._wheel_qpos[1], half_track=self.half_track,
-            wheel_radius=self.wheel_radius)
 
     def ramp_substeps(self, n):
         """The substeps of an n-substep phase over which the wheels' targets move."""
@@ -189,11 +179,7 @@ class WheelPhysics(navigation.Physics):
 
     def _wheel_speeds(self, left, right, n):
         """Turns the wheels by (left, right) rad over the ramp of an n-substep phase."""
-        ramp = self.ramp_substeps(n)
-        self._ramp_left = ramp
-        ctrl = self._ctrl
-        ctrl[self._wheel_ctrl[0]] = left / (ramp * self.timestep)
-        ctrl[self._wheel_ctrl[1]] = right / (ramp * self.timestep)
+        raise NotImplementedError
 
     def begin_turn(self, angle, n):
         """Turns by `angle` rad (counter-clockwise) over an n-substep phase."""
@@ -204,6 +190,42 @@ class WheelPhysics(navigation.Physics):
         """Moves `distance` units forward over an n-substep phase."""
         w = distance * self.unit / self.wheel_radius
         self._wheel_speeds(w, w, n)
+
+
+class WheelPhysics(WheelPlan):
+    """Two wheel hinges, ``left_wheel`` and ``right_wheel``, each under an
+    integrated-velocity servo: the control is the wheel's speed, the servo's target
+    angle integrates it and a PD loop on the wheel's angle follows. A phase of n
+    substeps sets the speeds that turn the wheels by the phase's angle in its first
+    RAMP share of the substeps; the rest lets the wheels settle on their targets. No
+    Python runs between phase boundaries."""
+
+    def _reload_from_data(self, data):
+        super()._reload_from_data(data)
+        m = self.model
+        ids = [navigation.named_id(m, navigation.mujoco.mjtObj.mjOBJ_ACTUATOR, name)
+               for name in ("left_wheel", "right_wheel")]
+        if min(ids) < 0:
+            raise navigation.ContractError(MISSING_ACTUATORS)
+        joints = [int(m.actuator_trnid[i, 0]) for i in ids]
+        self._wheel_geometry(joints)
+        self._wheel_ctrl = ids
+        self._wheel_act = [int(m.actuator_actadr[i]) for i in ids]
+        self._wheel_qpos = [int(m.jnt_qposadr[j]) for j in joints]
+        self._ramp_left = 0  # substeps left of the current phase's ramp
+        self._settings.update(
+            wheels=1, act0=ids[0], act1=ids[1], act_adr0=self._wheel_act[0],
+            act_adr1=self._wheel_act[1], wheel_q0=self._wheel_qpos[0],
+            wheel_q1=self._wheel_qpos[1], half_track=self.half_track,
+            wheel_radius=self.wheel_radius)
+
+    def _wheel_speeds(self, left, right, n):
+        """Turns the wheels by (left, right) rad over the ramp of an n-substep phase."""
+        ramp = self.ramp_substeps(n)
+        self._ramp_left = ramp
+        ctrl = self._ctrl
+        ctrl[self._wheel_ctrl[0]] = left / (ramp * self.timestep)
+        ctrl[self._wheel_ctrl[1]] = right / (ramp * self.timestep)
 
     def step(self, nstep=1):
         """Steps through the phase: the ramp, then the wheels settle at rest targets."""
@@ -224,3 +246,133 @@ class WheelPhysics(navigation.Physics):
             ctrl[c] = 0.0
             act[a] = q[j]
         self._ramp_left = 0
+
+
+#: A wheel_motors mount's roles (tasks.mount): the file's wheel hinges, and its motors
+#: by contract name motor_0, motor_1, ...
+WHEEL_JOINTS = ("left", "right")
+MOTOR_ROLE = "motor_{}"
+#: The control each motor is probed with at load, to measure its generalised force per
+#: unit control on the wheels (small, so no joint's actuatorfrcrange clips it).
+PROBE = 1e-3
+
+
+class MotorWheelPhysics(WheelPlan):
+    """Two wheel hinges (contract names ``left``, ``right``) turned through the file's
+    own motors (``motor_0``, ``motor_1``, ...: torque motors on the wheel joints or on
+    tendons over them), none added. The wheel-angle plan is WheelPlan's, its targets
+    held here: at every substep the desired wheel torques are
+    tau = kp (target - q) - kv dq, and the motors' controls that give them
+    (tasks.wheel_kernels.motor_controls, clipped to each motor's range); one compiled
+    call (tasks.wheel_kernels.wheel_phase) per phase. The kernels' compiled step does
+    not drive it (hooks_only): the Environment runs the hooks."""
+
+    hooks_only = True
+    #: Set by motor_wheel_physics from the mount: its motors' count and the PD gains
+    #: (N m per rad, N m s per rad).
+    motor_count = 2
+    kp = 0.0
+    kv = 0.0
+
+    def _reload_from_data(self, data):
+        super()._reload_from_data(data)
+        m = self.model
+        mjm = m.ptr
+        joints = [navigation.named_id(m, mujoco.mjtObj.mjOBJ_JOINT, role) for role in WHEEL_JOINTS]
+        motors = [navigation.named_id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, MOTOR_ROLE.format(k))
+                  for k in range(self.motor_count)]
+        if min(joints) < 0 or min(motors) < 0:
+            raise navigation.ContractError(
+                "wheel motors need hinges 'left' and 'right' and the motors "
+                + ", ".join(repr(MOTOR_ROLE.format(k)) for k in range(self.motor_count)))
+        self._wheel_geometry(joints)
+        self._wheel_q = mjm.jnt_qposadr[joints].astype(np.int64)
+        self._wheel_dof = mjm.jnt_dofadr[joints].astype(np.int64)
+        self._motors = np.array(motors, dtype=np.int64)
+        self._ctrl_lo = mjm.actuator_ctrlrange[motors, 0].copy()
+        self._ctrl_hi = mjm.actuator_ctrlrange[motors, 1].copy()
+        unlimited = ~mjm.actuator_ctrllimited[motors].astype(bool)
+        self._ctrl_lo[unlimited], self._ctrl_hi[unlimited] = -np.inf, np.inf
+        self.motor_forces = motor_forces(mjm, self._motors, self._wheel_dof)
+        g = self.motor_forces
+        gram = g.T @ g   # motor_controls inverts it
+        if abs(np.linalg.det(gram)) <= 1e-12 * max(1e-300, np.trace(gram)) ** 2:
+            raise navigation.ContractError(
+                "action.motors: the motors do not turn the two wheels independently "
+                f"(force per unit control on the wheels: {g.tolist()})")
+        #: The plan's state: the wheels' targets (rad), their step per substep of the
+        #: ramp and the ramp's substeps left; the kernel's scratch (torques, controls).
+        self._target = np.zeros(2)
+        self._delta = np.zeros(2)
+        self._ramp_left = np.zeros(1, dtype=np.int64)
+        self._tau = np.zeros(2)
+        self._c = np.zeros(self.motor_count)
+
+    def set_drive(self, **settings):
+        """Keeps the settings but builds no kernels' record: no compiled step drives
+        these motors (hooks_only)."""
+        self._settings.update(settings)
+        self.record = None
+        return None
+
+    def _wheel_speeds(self, left, right, n):
+        """The targets move by (left, right) rad over the ramp of an n-substep phase."""
+        ramp = self.ramp_substeps(n)
+        self._ramp_left[0] = ramp
+        self._delta[0], self._delta[1] = left / ramp, right / ramp
+
+    def step(self, nstep=1):
+        """nstep substeps of the phase, the PD loop on the motors at each."""
+        status = wheel_kernels.wheel_phase(
+            self._m, self._d, nstep, self._bad_qacc, self._xmat, self._free is not None,
+            self._min_cos_tilt, self._qpos, self._qvel, self._ctrl, self._wheel_q,
+            self._wheel_dof, self._motors, self.motor_forces, self._ctrl_lo, self._ctrl_hi,
+            self.kp, self.kv, self._target, self._delta, self._ramp_left, self._tau, self._c)
+        self.substeps += nstep
+        if status != kernels.OK:
+            self.raise_for(status)
+
+    def halt(self):
+        """The targets where the wheels are: a stalled wheel gives up the rest."""
+        self._target[:] = self._qpos[self._wheel_q]
+        self._ramp_left[0] = 0
+
+    def set_robot_pose(self, x, y, heading=0.0):
+        super().set_robot_pose(x, y, heading)
+        self.halt()
+
+    def saved_state(self):
+        return super().saved_state() + (self._target.copy(), self._ramp_left.copy())
+
+    def restore_state(self, saved):
+        super().restore_state(saved[:-2])
+        self._target[:], self._ramp_left[:] = saved[-2:]
+
+
+def motor_forces(model, motors, dofs):
+    """forces[k, j]: motor k's generalised force on dof j per unit of its control, measured
+    on a scratch MjData at the model's rest pose (qfrc_actuator with motor k's control at
+    PROBE and the others 0, less with all 0, over PROBE; control clamping off meanwhile)."""
+    d = mujoco.MjData(model)
+    flags = model.opt.disableflags
+    model.opt.disableflags = flags | int(mujoco.mjtDisableBit.mjDSBL_CLAMPCTRL)
+    try:
+        mujoco.mj_forward(model, d)
+        rest = d.qfrc_actuator[dofs].copy()
+        forces = np.zeros((len(motors), len(dofs)))
+        for k, a in enumerate(motors):
+            d.ctrl[:] = 0.0
+            d.ctrl[a] = PROBE
+            mujoco.mj_forward(model, d)
+            forces[k] = (d.qfrc_actuator[dofs] - rest) / PROBE
+    finally:
+        model.opt.disableflags = flags
+    return forces
+
+
+def motor_wheel_physics(mount):
+    """MotorWheelPhysics with a wheel_motors mount's motor count and gains."""
+    gains = dict(mount.gait)
+    motors = [name for role, name in mount.action[1:] if role not in WHEEL_JOINTS]
+    return type("MotorWheelPhysics", (MotorWheelPhysics,),
+                {"motor_count": len(motors), "kp": gains["kp"], "kv": gains["kv"]})

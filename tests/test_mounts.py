@@ -11,7 +11,7 @@ import models
 import tasks
 from experiments.running import protocol
 from helpers import ROOT, ebrl
-from tasks import mount, navigation
+from tasks import mount, navigation, two_wheel
 
 MOUNTS = ROOT / "models" / "mounts"
 #: Each shipped mount's robot file: where the installed package (or the vendored copy) holds it.
@@ -134,6 +134,9 @@ def test_the_scaled_room_against_hand_computed_corners(tmp_path):
         env.close()
 
 
+#: The car's mount with its file named by a placeholder (the test's tmp_path is elsewhere).
+CAR = (MOUNTS / "car.toml").read_text().replace('"../vendor/mujoco_car/car.xml"', '"{{car}}"')
+
 BAD = [
     ("", "file: missing (required)"),
     ('file = "x.xml"\ndrive = "two_wheel"\nbase = "b"', "file: no robot file at"),
@@ -160,6 +163,15 @@ BAD = [
     ('file = "{pt}"\ndrive = "two_wheel"\nbase = "torso"\n[bumper]\nradius = 0.2\n'
      '[beams]\nheight = 0.5\n[action]\nkind = "servos"', "bumper: missing"),    ('file = "{pt}"\ndrive = "floating"\nbase = "torso"\n[bumper]\ngeom = "pointbody"\n'
      '[beams]\nheight = 0.5\n[action]\nkind = "wheels"', "action.kind: the floating drive takes one of"),
+    (CAR.replace('"turn"]', '"steer"]'), "action.motors: no actuator named 'steer' in"),
+    (CAR.replace('left = "left"', 'left = "left_hinge"'), "action.left: no joint named 'left_hinge' in"),
+    (CAR.replace('motors = ["forward", "turn"]\n', ""), "action.motors: missing"),
+    (CAR.replace('motors = ["forward", "turn"]', 'motors = ["forward"]'),
+     "action.motors: needs two or more different motors"),
+    (CAR.replace("kp = 0.2\n", ""), "action.kp: missing"),
+    (CAR.replace('drop = ["world", "lights"]', 'drop = ["world", "actuators"]'),
+     "drop: wheel_motors turn the wheels through the file's motors"),
+    (CAR.replace('joints = "file"', 'joints = "planar"'), "joints: wheel_motors roll the file's wheels"),
     ((MOUNTS / "ant.toml").read_text().replace('hip_3 = "back_left_hip"\n', "").replace(
         '"dm_control:', '"{{ant}}').replace("third_party/ant/ant.xml", ""),
      "action.hip_3: missing: the file's motor for it"),
@@ -174,7 +186,8 @@ def test_a_bad_mount_is_one_line_naming_the_field_and_the_file(tmp_path, text, m
     path = tmp_path / "bad.toml"
     point = pathlib_path(SOURCES["point"]())
     ant = pathlib_path(SOURCES["ant"]())
-    path.write_text(text.format(pt=point).replace("{ant}", str(ant)))
+    car = pathlib_path(SOURCES["car"]())
+    path.write_text(text.format(pt=point).replace("{ant}", str(ant)).replace("{car}", str(car)))
     with pytest.raises(mount.MountError) as e:
         tasks.load(str(path)).close()
     line = str(e.value)
@@ -206,9 +219,10 @@ def test_mounted_planar_robots_do_what_their_drive_promises():
             assert e.max() <= limits[key], (name, key, e.max())
 
 
-def test_the_fused_loop_refuses_the_gait_drive_and_takes_a_mounted_two_wheel_robot():
+def test_the_fused_loop_refuses_the_hooks_only_drives_and_takes_a_mounted_two_wheel_robot():
+    """The gait and the car's motors (MotorWheelPhysics) run on the hooks only."""
     from experiments.running import fused
-    for name, supported in (("ant", False), ("point", True)):
+    for name, supported in (("ant", False), ("car", False), ("point", True)):
         env = tasks.load(name, seed=0)
         try:
             agent = protocol.make_agent(protocol.RunSpec(name, "avoidance", 0, 10), env)
@@ -275,3 +289,83 @@ def test_an_installed_copy_finds_the_shipped_mounts_and_behaviours_by_name(tmp_p
                                           "HOME": str(tmp_path)})
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split() == ["eq8", "eq9-10"]
+
+
+def test_the_car_runs_through_its_own_motors_and_adds_no_actuator():
+    """The compiled car's actuators and tendons are exactly its file's (its motors
+    "forward" and "turn" on its tendons), driven by MotorWheelPhysics, whose measured
+    force per unit control on the wheels is the tendons' coefficients; no compiled step
+    drives it."""
+    import mujoco
+    own = mujoco.MjModel.from_xml_path(str(pathlib_path(SOURCES["car"]())))
+    env = tasks.load("car", seed=0)
+    try:
+        m = env.physics.model.ptr
+        names = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, i) for i in range(m.nu)]
+        assert names == [models.PREFIX + mujoco.mj_id2name(own, mujoco.mjtObj.mjOBJ_ACTUATOR, i)
+                         for i in range(own.nu)] == ["robot/forward", "robot/turn"]
+        assert m.ntendon == own.ntendon == 2
+        for field in ("actuator_trntype", "actuator_gear", "actuator_ctrlrange", "actuator_gainprm",
+                      "actuator_biasprm", "tendon_adr", "wrap_prm"):
+            assert np.array_equal(getattr(m, field), getattr(own, field)), field
+        physics = env.physics
+        assert isinstance(physics, two_wheel.MotorWheelPhysics) and not env.steps_compiled
+        assert np.allclose(physics.motor_forces, [[0.5, 0.5], [-0.5, 0.5]], atol=1e-12)
+        assert (physics.kp, physics.kv) == (0.2, 0.01)
+    finally:
+        env.close()
+
+
+def test_the_motor_controls_by_hand():
+    """tau = M^T c solved for c: two motors M = [[1, 1], [-1, 2]] and tau = (1, 4) give
+    c0 - c1 = 1, c0 + 2 c1 = 4, so c = (2, 1); clipped to [-1.5, 1.5] x [-1, 0.5]:
+    (1.5, 0.5). Three motors [[1, 0], [0, 1], [1, 1]] and tau = (1, 2): the least-norm c
+    is M (M^T M)^-1 tau = M (0, 1) = (0, 1, 1) (the exact (1, 2, 0) has a larger norm)."""
+    from tasks.wheel_kernels import motor_controls
+    c = np.zeros(2)
+    inf = np.full(2, np.inf)
+    motor_controls(np.array([[1.0, 1.0], [-1.0, 2.0]]), np.array([1.0, 4.0]), -inf, inf, c)
+    assert np.allclose(c, (2.0, 1.0), rtol=0, atol=1e-12)
+    motor_controls(np.array([[1.0, 1.0], [-1.0, 2.0]]), np.array([1.0, 4.0]),
+                   np.array([-1.5, -1.0]), np.array([1.5, 0.5]), c)
+    assert np.allclose(c, (1.5, 0.5), rtol=0, atol=1e-12)
+    c3 = np.zeros(3)
+    motor_controls(np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]), np.array([1.0, 2.0]),
+                   np.full(3, -np.inf), np.full(3, np.inf), c3)
+    assert np.allclose(c3, (0.0, 1.0, 1.0), rtol=0, atol=1e-12)
+
+
+def test_the_car_does_what_its_mount_states():
+    """`ebrl check`'s accuracy for the car over 100 free-space actions, within its
+    mount's limits (turn 0.2 rad, move 0.8 units), and 100 wall-ramming actions
+    without a warning, a NaN or a sink."""
+    from experiments.checks import robotcheck
+    errors, limits = robotcheck.accuracy("car", 100)
+    assert limits == {"turn": 0.2, "move": 0.8}
+    for key, e in errors.items():
+        assert e.max() <= limits[key], (key, e.max())
+    r = robotcheck.fuzz("car", 100, seed=1)
+    assert r["nan_steps"] == 0 and r["warnings"] == 0
+    assert r["worst_clearance"] > -r["sink_limit"]
+    assert r["max_tilt_degrees"] < navigation.MAX_TILT_DEGREES
+
+
+def test_a_refused_move_of_the_car_returns_its_wheel_targets_too():
+    """blocked_move "refuse" against a wall: the state after the turn is restored, the
+    wheels' targets with it, so the leftover turn turns the car where it stood (its frame
+    moves along the turn's arc, 0.875 units about the axle) instead of driving the
+    wheels on to the blocked move's targets, into the wall."""
+    env = tasks.load("car", seed=0, sensor_noise=0.0, action_noise=0.0, start_jitter=False,
+                     blocked_move="refuse")
+    try:
+        env.reset()
+        physics = env.physics
+        physics.set_robot_pose(2.5, 30.0, math.pi)   # facing the west wall, 1 unit clear
+        x0, y0, _ = physics.robot_pose()
+        substeps = physics.substeps
+        env.step([0.0])
+        x1, y1, _ = physics.robot_pose()
+        assert physics.substeps - substeps == 400   # turn, move, the whole move turned
+        assert math.hypot(x1 - x0, y1 - y0) < 2 * 0.875 and x1 > x0 - 0.1
+    finally:
+        env.close()
