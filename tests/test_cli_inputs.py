@@ -3,9 +3,13 @@ processes: each one fails fast, in one line, without a traceback and writing not
 
 Every case runs in its own sandbox folder (the process's cwd), holding a regular file,
 an empty folder and a folder named like a video; the sandbox must be unchanged after.
-The cases run a few at a time in parallel, each a separate `python -m experiments`.
+Each case is its own process, forked from an interpreter that imported the command once
+(tests/data/forked_cli.py: a fresh `python -m experiments` spends about a second on its
+imports, 100 cases 100 s); a few cases also run as a fresh `python -m experiments`, the
+whole way a user starts it.
 """
 import concurrent.futures
+import json
 import os
 import pathlib
 import subprocess
@@ -162,26 +166,62 @@ def _snapshot(folder):
                   for p in folder.rglob("*"))
 
 
-def _run(args, cwd):
+def _env():
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(
         [str(ROOT)] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]))
     for name in ("EBRL_TEST_FAIL", "EBRL_TEST_CRASH", "EBRL_TEST_DISK_FULL", "EBRL_TEST_DISK_FULL_AT"):
         env.pop(name, None)
+    return env
+
+
+def _run(args, cwd):
+    """One case as a fresh `python -m experiments`: (process, seconds, before, after)."""
     before = _snapshot(cwd)
     started = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "experiments", *args], cwd=cwd, env=env,
+    proc = subprocess.run([sys.executable, "-m", "experiments", *args], cwd=cwd, env=_env(),
                           capture_output=True, text=True, timeout=60)
     return proc, time.perf_counter() - started, before, _snapshot(cwd)
 
 
+def _run_forked(cases, scratch):
+    """Cases [(args, sandbox), ...] as processes forked by one tests/data/forked_cli.py:
+    [(process, seconds, before, after), ...], a process as subprocess.run gives it."""
+    scratch.mkdir()
+    befores = [_snapshot(cwd) for _, cwd in cases]
+    (scratch / "cases.json").write_text(json.dumps([[str(cwd), args] for args, cwd in cases]))
+    driver = ROOT / "tests" / "data" / "forked_cli.py"
+    subprocess.run([sys.executable, str(driver), str(scratch / "cases.json"),
+                    str(scratch / "out.json")], cwd=scratch, env=_env(), check=True, timeout=600)
+    out = json.loads((scratch / "out.json").read_text())
+    return [(subprocess.CompletedProcess(args, status, stdout, stderr), seconds, before,
+             _snapshot(cwd))
+            for (args, cwd), (status, stdout, stderr, seconds), before in zip(cases, out, befores)]
+
+
+#: Cases that also run as a fresh `python -m experiments` (one per kind of failure: the
+#: parser's, a value's check, a folder's check).
+FRESH = (0, 7, 39)
+
+
 @pytest.fixture(scope="module")
 def outcomes(tmp_path_factory):
-    """Every case's (process, seconds, sandbox before, sandbox after), run 4 at a time."""
+    """Every case's (process, seconds, sandbox before, sandbox after), forked in two
+    halves side by side."""
     base = tmp_path_factory.mktemp("bad_inputs")
-    with concurrent.futures.ThreadPoolExecutor(4) as pool:
-        futures = [pool.submit(_run, args, _sandbox(base / f"case_{i:03d}"))
-                   for i, (args, _) in enumerate(CASES)]
-        return [f.result() for f in futures]
+    cases = [(args, _sandbox(base / f"case_{i:03d}")) for i, (args, _) in enumerate(CASES)]
+    halves = (cases[0::2], cases[1::2])
+    with concurrent.futures.ThreadPoolExecutor(2) as pool:
+        done = list(pool.map(_run_forked, halves, (base / "forks_0", base / "forks_1")))
+    out = [None] * len(cases)
+    out[0::2], out[1::2] = done
+    return out
+
+
+@pytest.fixture(scope="module")
+def fresh_outcomes(tmp_path_factory):
+    """FRESH's cases as fresh processes, each in a sandbox of its own."""
+    base = tmp_path_factory.mktemp("bad_inputs_fresh")
+    return {i: _run(CASES[i][0], _sandbox(base / f"case_{i:03d}")) for i in FRESH}
 
 
 def test_enough_cases_across_the_subcommands():
@@ -191,11 +231,8 @@ def test_enough_cases_across_the_subcommands():
         assert commands.count(command) >= 5, command
 
 
-@pytest.mark.parametrize("index", range(len(CASES)),
-                         ids=[" ".join(args) or "(nothing)" for args, _ in CASES])
-def test_a_bad_input_fails_fast_in_one_line_writing_nothing(outcomes, index):
+def _check(index, proc, seconds, before, after):
     args, message = CASES[index]
-    proc, seconds, before, after = outcomes[index]
     assert proc.returncode == 2, (proc.returncode, proc.stderr)
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and message in lines[0], proc.stderr
@@ -204,3 +241,17 @@ def test_a_bad_input_fails_fast_in_one_line_writing_nothing(outcomes, index):
     assert proc.stdout == ""
     assert seconds < LIMIT_S, seconds
     assert after == before  # nothing written, nothing touched
+
+
+@pytest.mark.parametrize("index", range(len(CASES)),
+                         ids=[" ".join(args) or "(nothing)" for args, _ in CASES])
+def test_a_bad_input_fails_fast_in_one_line_writing_nothing(outcomes, index):
+    _check(index, *outcomes[index])
+
+
+@pytest.mark.parametrize("index", FRESH, ids=[" ".join(CASES[i][0]) for i in FRESH])
+def test_a_bad_input_to_a_fresh_command_is_the_same_line(outcomes, fresh_outcomes, index):
+    """The whole way a user starts it (`python -m experiments`): the same one line as the
+    forked process's."""
+    _check(index, *fresh_outcomes[index])
+    assert fresh_outcomes[index][0].stderr == outcomes[index][0].stderr
