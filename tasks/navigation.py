@@ -16,7 +16,6 @@ import mujoco
 import numpy as np
 from dm_control import mujoco as dm_mujoco
 from dm_control.rl import control
-from dm_control.suite import base
 from dm_env import specs
 
 from models import NAMES_TEXT, PREFIX, UNIT, UNIT_NUMERIC, contract_names, room_layout, unit_of
@@ -357,8 +356,12 @@ class TaskStream:
             kernels.task_draws(self.record, u, z, sensor_noise, vz, velocity_noise)
 
 
-class Navigation(base.Task):
-    """Reach the goal square from the jittered start; the robot class maps actions."""
+class Navigation(control.Task):
+    """Reach the goal square from the jittered start; the robot class maps actions.
+
+    A dm_control task (control.Task, as dm_control.suite.base.Task is, whose only part used
+    here is its RandomState: importing dm_control.suite imports every suite domain and
+    SciPy, a third of a second per process)."""
 
     #: Action dimension, set by each robot.
     action_dim = 1
@@ -368,9 +371,10 @@ class Navigation(base.Task):
     observation_keys = ("range",)
 
     def __init__(self, config=TaskConfig(), *, time_scale=1.0, random=None):
-        super().__init__(random=random)
+        if not isinstance(random, np.random.RandomState):  # as suite.base.Task takes it
+            random = np.random.RandomState(random)
         #: The task's random stream as the compiled draws read it; `random` settles it.
-        self.stream = TaskStream(super().random)
+        self.stream = TaskStream(random)
         self.config = config
         #: Seconds of an agent step over the drive's own (1 for the paper's robots).
         self.time_scale = float(time_scale)
