@@ -22,8 +22,9 @@ $(VENV)/.installed-test: $(VENV)/.installed
 demo: $(VENV)/.installed
 	$(BIN)/ebrl demo --out $(DEMO_OUT)
 
+# Two workers (tests/conftest.py keeps the tests that start Ray or PostgreSQL on one).
 test: $(VENV)/.installed-test
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n 2 --dist loadgroup
 
 bench: $(VENV)/.installed
 	$(BIN)/ebrl bench

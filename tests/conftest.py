@@ -30,3 +30,22 @@ def postgres_url(postgres_server):
     """A fresh database on the server, as a plain postgresql:// URL (the user's form)."""
     from experiments.checks import pgserver
     return pgserver.database(postgres_server, f"ebrl_{next(_databases)}")
+
+
+# -- two pytest-xdist workers (make test: pytest -n 2 --dist loadgroup) ------------------
+#: Tests that start many processes of their own (a Ray cluster, PostgreSQL and its study
+#: workers) run one at a time on one worker: two of them at once on two cores took 3-4x
+#: their time alone. Modules whose module-scoped fixture is the bulk of their cost stay
+#: on one worker, so the fixture is built once.
+_ONE_WORKER_MODULES = ("test_cli_inputs.py", "test_rendering.py")
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        module = item.path.name
+        fixtures = set(getattr(item, "fixturenames", ()))
+        if (module == "test_cluster.py" or item.name.startswith("test_ray_")
+                or fixtures & {"cluster", "postgres_server", "postgres_url"}):
+            item.add_marker(pytest.mark.xdist_group("processes"))
+        elif module in _ONE_WORKER_MODULES:
+            item.add_marker(pytest.mark.xdist_group(module))
