@@ -451,3 +451,21 @@ def test_a_full_disk_at_a_video_is_one_line_and_keeps_the_last(tmp_path):
     assert video.read_bytes() == b"an older video" and leftovers(tmp_path) == []
     ebrl(*args, env=env())
     assert video.stat().st_size > 1000
+
+
+def test_a_killed_writers_temporary_file_is_removed_by_the_next_write(tmp_path):
+    """SIGKILL mid-write leaves `.run.json.<host>.<pid>.*.tmp`: the next write of the file
+    removes it when that pid no longer runs; a live writer's, or another host's, stays."""
+    from experiments.running import results
+    path = tmp_path / "run.json"
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    alive = os.getppid()  # pytest's parent: running while this test runs
+    left = tmp_path / f"{results._tmp_prefix(path, dead.pid)}abc.tmp"
+    live = tmp_path / f"{results._tmp_prefix(path, alive)}def.tmp"
+    other = tmp_path / f".run.json.another-host.{dead.pid}.ghi.tmp"
+    for f in (left, live, other):
+        f.write_text("half")
+    results.atomic_write(path, "{}")
+    assert path.read_text() == "{}"
+    assert not left.exists() and live.exists() and other.exists()

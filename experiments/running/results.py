@@ -12,11 +12,13 @@ report names it, and a rerun retries it.
 import contextlib
 import csv
 import errno
+import glob
 import io
 import json
 import os
 import pathlib
 import platform
+import socket
 import subprocess
 import tempfile
 import traceback
@@ -83,6 +85,29 @@ def write_error(path, e):
                       "the same command to finish")
 
 
+def _tmp_prefix(path, pid=None):
+    """A temporary file's name before its random part: the file's, this host's and the
+    writing process's, so that a later writer can tell a dead writer's leftover."""
+    return f".{path.name}.{socket.gethostname()}.{os.getpid() if pid is None else pid}."
+
+
+def _remove_dead_writers(path):
+    """Removes the temporary files of path that a process of this host left when it was
+    killed mid-write (SIGKILL runs no cleanup): those whose writer's pid no longer runs.
+    A live writer's file, or another host's, is never touched."""
+    host = f".{path.name}.{socket.gethostname()}."
+    for tmp in path.parent.glob(f"{glob.escape(host)}*.tmp"):
+        pid = tmp.name[len(host):].split(".", 1)[0]
+        if not pid.isdigit() or int(pid) == os.getpid():
+            continue
+        try:
+            os.kill(int(pid), 0)
+        except ProcessLookupError:
+            tmp.unlink(missing_ok=True)
+        except OSError:  # alive (another user's process), or not ours to judge
+            pass
+
+
 @contextlib.contextmanager
 def atomic_file(path):
     """The one atomic write of every file a command writes (run records, summary.json,
@@ -90,13 +115,15 @@ def atomic_file(path):
     path beside path to write; when the block ends, the file is synced and renamed over
     path, so that path is either its old self or complete. A write that fails (a full
     disk, a folder turned read-only or removed) raises WriteError naming the folder and
-    the error, and leaves no temporary file."""
+    the error, and leaves no temporary file; one a killed writer left (SIGKILL) is removed
+    by the next write of the same file (_remove_dead_writers)."""
     global _records
     path = pathlib.Path(path)
     tmp = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+        _remove_dead_writers(path)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=_tmp_prefix(path), suffix=".tmp")
         os.close(fd)
         tmp = pathlib.Path(tmp)
         os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp makes 0600; results are for sharing
