@@ -295,13 +295,18 @@ def _actuator_roles(fields, action, drive):
                  if r in action)
 
 
-def _wheel_roles(fields, action):
-    """A "wheels" action's (role, the file's wheel joint) pairs and its servos' gains."""
-    for role in ("left", "right"):
+def _wheel_joints(fields, action):
+    """The (role, the file's wheel joint) pairs of a "wheels" or "wheel_motors" action."""
+    from tasks.two_wheel import WHEEL_JOINTS
+    for role in WHEEL_JOINTS:
         if role not in action:
             fields.fail(f"action.{role}", "missing: the file's wheel joint")
-    roles = (("left", fields.text(action, "left", "action.left")),
-             ("right", fields.text(action, "right", "action.right")))
+    return tuple((r, fields.text(action, r, f"action.{r}")) for r in WHEEL_JOINTS)
+
+
+def _wheel_roles(fields, action):
+    """A "wheels" action's (role, the file's wheel joint) pairs and its servos' gains."""
+    roles = _wheel_joints(fields, action)
     # the wheel servos' gains: diff_drive.xml's unless given (kp N m/rad, kv N m s/rad,
     # force the servo's torque limit, N m)
     gains = tuple((k, fields.number(action, k, f"action.{k}", d))
@@ -313,19 +318,17 @@ def _wheel_motor_roles(fields, action):
     """A "wheel_motors" action's (role, name) pairs, the file's wheel joints ("left",
     "right") and its motors (tasks.two_wheel.MOTOR_ROLE: "motor_0", ...), and its PD
     gains (kp N m/rad, kv N m s/rad: required, a robot's own)."""
-    from tasks.two_wheel import MOTOR_ROLE, WHEEL_JOINTS
+    from tasks.two_wheel import MOTOR_ROLE
     fail = fields.fail
-    for role in WHEEL_JOINTS + ("motors",):
-        if role not in action:
-            fail(f"action.{role}", "missing: the file's wheel joint" if role != "motors" else
-                 "missing: the file's motors that turn the wheels, as a list")
+    roles = _wheel_joints(fields, action)
+    if "motors" not in action:
+        fail("action.motors", "missing: the file's motors that turn the wheels, as a list")
     motors = fields.names(action, "motors", "action.motors")
     if len(motors) < 2 or len(set(motors)) != len(motors):
         fail("action.motors", f"needs two or more different motors of the file, got {list(motors)}")
     for k in ("kp", "kv"):
         if k not in action:
             fail(f"action.{k}", "missing: the PD gain on the wheel angles (a robot's own)")
-    roles = tuple((r, fields.text(action, r, f"action.{r}")) for r in WHEEL_JOINTS)
     roles += tuple((MOTOR_ROLE.format(k), name) for k, name in enumerate(motors))
     gains = tuple((k, fields.number(action, k, f"action.{k}", positive=k == "kp"))
                   for k in ("kp", "kv"))
@@ -388,6 +391,14 @@ def _by_name(items, name):
     return next((x for x in items if x.name == name), None)
 
 
+def _file_actuator(mount, spec, field, name):
+    """The file's actuator `name`, or the mount's one-line error at `field`."""
+    actuator = _by_name(spec.actuators, name)
+    if actuator is None:
+        _fail(mount, field, f"no actuator named {name!r} in {mount.model}")
+    return actuator
+
+
 def robot_spec(mount):
     """The robot file's MjSpec, edited as the mount says (the file itself is untouched)."""
     import models
@@ -434,8 +445,7 @@ def _drop(mount, spec, names):
         _check_wheel_motors(mount, spec, drop)
     if kind == "actuators":
         for role, name in mount.action[1:]:
-            if _by_name(spec.actuators, name) is None:
-                _fail(mount, f"action.{role}", f"no actuator named {name!r} in {mount.model}")
+            _file_actuator(mount, spec, f"action.{role}", name)
             if name != role:
                 names[role] = name
     for field, find in (("drop_bodies", spec.body), ("drop_geoms", spec.geom)):
@@ -727,10 +737,8 @@ def _check_gait(mount, spec):
     for role in [f"hip_{i}" for i in range(LEGS)] + [f"ankle_{i}" for i in range(LEGS)]:
         name = roles.get(role)
         if name is None:
-            raise MountError(f"{mount.path}: action.{role}: missing: the file's motor for it")
-        if _by_name(spec.actuators, name) is None:
-            raise MountError(f"{mount.path}: action.{role}: no actuator named {name!r} in "
-                             f"{mount.model}")
+            _fail(mount, f"action.{role}", "missing: the file's motor for it")
+        _file_actuator(mount, spec, f"action.{role}", name)
 
 
 def _check_wheel_motors(mount, spec, drop):
@@ -753,9 +761,7 @@ def _check_wheel_motors(mount, spec, drop):
             if joint.type != mujoco.mjtJoint.mjJNT_HINGE:
                 _fail(mount, field, f"joint {name!r} is not a hinge (a wheel's joint)")
             continue
-        motor = _by_name(spec.actuators, name)
-        if motor is None:
-            _fail(mount, field, f"no actuator named {name!r} in {mount.model}")
+        motor = _file_actuator(mount, spec, field, name)
         if motor.trntype == mujoco.mjtTrn.mjTRN_TENDON and "tendons" in drop:
             _fail(mount, "drop", f"motor {name!r} pulls a tendon of the file: do not drop "
                                  "its tendons")

@@ -294,12 +294,13 @@ class MotorWheelPhysics(WheelPlan):
         unlimited = ~mjm.actuator_ctrllimited[motors].astype(bool)
         self._ctrl_lo[unlimited], self._ctrl_hi[unlimited] = -np.inf, np.inf
         self.motor_forces = motor_forces(mjm, self._motors, self._wheel_dof)
-        g = self.motor_forces
-        gram = g.T @ g   # motor_controls inverts it
-        if abs(np.linalg.det(gram)) <= 1e-12 * max(1e-300, np.trace(gram)) ** 2:
+        #: M^T M's (a, b, e, det), which motor_controls inverts at every substep.
+        self._mtm = wheel_kernels.gram(self.motor_forces)
+        a, _, e, det = self._mtm
+        if abs(det) <= 1e-12 * max(1e-300, a + e) ** 2:
             raise navigation.ContractError(
                 "action.motors: the motors do not turn the two wheels independently "
-                f"(force per unit control on the wheels: {g.tolist()})")
+                f"(force per unit control on the wheels: {self.motor_forces.tolist()})")
         #: The plan's state: the wheels' targets (rad), their step per substep of the
         #: ramp and the ramp's substeps left; the kernel's scratch (torques, controls).
         self._target = np.zeros(2)
@@ -326,7 +327,8 @@ class MotorWheelPhysics(WheelPlan):
         status = wheel_kernels.wheel_phase(
             self._m, self._d, nstep, self._bad_qacc, self._xmat, self._free is not None,
             self._min_cos_tilt, self._qpos, self._qvel, self._ctrl, self._wheel_q,
-            self._wheel_dof, self._motors, self.motor_forces, self._ctrl_lo, self._ctrl_hi,
+            self._wheel_dof, self._motors, self.motor_forces, self._mtm, self._ctrl_lo,
+            self._ctrl_hi,
             self.kp, self.kv, self._target, self._delta, self._ramp_left, self._tau, self._c)
         self.substeps += nstep
         if status != kernels.OK:

@@ -321,16 +321,18 @@ def test_the_motor_controls_by_hand():
     c0 - c1 = 1, c0 + 2 c1 = 4, so c = (2, 1); clipped to [-1.5, 1.5] x [-1, 0.5]:
     (1.5, 0.5). Three motors [[1, 0], [0, 1], [1, 1]] and tau = (1, 2): the least-norm c
     is M (M^T M)^-1 tau = M (0, 1) = (0, 1, 1) (the exact (1, 2, 0) has a larger norm)."""
-    from tasks.wheel_kernels import motor_controls
+    from tasks.wheel_kernels import gram, motor_controls
     c = np.zeros(2)
     inf = np.full(2, np.inf)
-    motor_controls(np.array([[1.0, 1.0], [-1.0, 2.0]]), np.array([1.0, 4.0]), -inf, inf, c)
+    m2 = np.array([[1.0, 1.0], [-1.0, 2.0]])
+    motor_controls(m2, gram(m2), np.array([1.0, 4.0]), -inf, inf, c)
     assert np.allclose(c, (2.0, 1.0), rtol=0, atol=1e-12)
-    motor_controls(np.array([[1.0, 1.0], [-1.0, 2.0]]), np.array([1.0, 4.0]),
+    motor_controls(m2, gram(m2), np.array([1.0, 4.0]),
                    np.array([-1.5, -1.0]), np.array([1.5, 0.5]), c)
     assert np.allclose(c, (1.5, 0.5), rtol=0, atol=1e-12)
     c3 = np.zeros(3)
-    motor_controls(np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]), np.array([1.0, 2.0]),
+    m3 = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])
+    motor_controls(m3, gram(m3), np.array([1.0, 2.0]),
                    np.full(3, -np.inf), np.full(3, np.inf), c3)
     assert np.allclose(c3, (0.0, 1.0, 1.0), rtol=0, atol=1e-12)
 
