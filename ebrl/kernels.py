@@ -62,19 +62,28 @@ def similarities(x, inputs, size, variance, group_of, group_size, group_weight, 
     (x_i - m_i)^2 / V_i); eq 3: S = sum_j w_j S'_j, with the weights w_j already
     divided by their sum. With one group (weight 1) this is eq 2. Each sum runs over
     the components in index order, as `ebrl.similarity` does.
+
+    Computed as sum_i (x_i - m_i)^2 c_i with c_i = 1 / (2 n_j V_i) taken once per act:
+    per element and component a multiply instead of two divisions, and one square root
+    per element and group (protocol 5; docs/speed.md). This rounds differently from
+    the formula as written (`ebrl.similarity`) in the last bits: within 1e-12 of it
+    (tests/test_ebrl_equations.py).
     """
-    groups = group_weight.shape[0]
+    groups, n = group_weight.shape[0], x.shape[0]
+    scale = np.empty(n)
+    for i in range(n):
+        scale[i] = 1.0 / (2.0 * group_size[group_of[i]] * variance[i])
     radicand = np.zeros((groups, size))
-    for i in range(x.shape[0]):
-        acc, row, xi, v = radicand[group_of[i]], inputs[i], x[i], variance[i]
+    for i in range(n):
+        acc, row, xi, c = radicand[group_of[i]], inputs[i], x[i], scale[i]
         for m in range(size):
             d = xi - row[m]
-            acc[m] += d * d / v
+            acc[m] += d * d * c
     out[:size] = 0.0
     for j in range(groups):
-        acc, w, twice_n = radicand[j], group_weight[j], 2.0 * group_size[j]
+        acc, w = radicand[j], group_weight[j]
         for m in range(size):
-            out[m] += w * (1.0 - np.sqrt(acc[m] / twice_n))
+            out[m] += w * (1.0 - np.sqrt(acc[m]))
 
 
 @njit(cache=True)

@@ -39,16 +39,26 @@ class Drive:
 
 
 DRIVES = {
+    # Protocol 5 (docs/interpretation.md, "The adopted readings"): stage 1's fallback
+    # readings (`ebrl fit --stage first-trial`, docs/fit_first_trial_two_wheel.md, trial
+    # 6 less its blocked_move=refuse); the learner's Table 1 defaults.
     "two_wheel": Drive("two_wheel", table1="T", budget=30_000, avoidance="eq8",
                        modalities=(("range", 1.0),),
-                       readings=(("initial_reliability", 0.5),)),
-    # `ebrl fit`'s trial 126 (study fit150, RESULTS.md "Search"), its values as searched.
+                       readings=(("random_demand", "uniform_all"),
+                                 ("random_in_avoidance", "add"),
+                                 ("leftover_turn", "away"))),
+    # Stage 1's fallback and action readings (docs/fit_first_trial_floating.md, trial 9);
+    # stage 2's policy threshold (0.4, between trial 126's 0.474 and 0.3: interpretation.md);
+    # the initial reliability, eq 9's dead zone and the velocity sensor's readings from
+    # `ebrl fit`'s trial 126 (protocol 4, study fit150, RESULTS.md "Search"), as searched.
     "floating": Drive("floating", table1="F", budget=100_000, avoidance="eq9-10",
                       modalities=(("range", 0.7), ("velocity", 0.3)),
-                      readings=(("policy_threshold", 0.47387881369719764),
+                      readings=(("policy_threshold", 0.4),
                                 ("initial_reliability", 0.15582952700818442),
-                                ("eq9_dead_zone", "keep"), ("random_in_avoidance", "add"),
-                                ("action_noise", 0.37999421937185585),
+                                ("eq9_dead_zone", "keep"),
+                                ("random_demand", "uniform_all"),
+                                ("random_in_avoidance", "replace"),
+                                ("action_noise", 0.17273080599893353),
                                 ("velocity_noise", 0.06931187891441754),
                                 ("velocity_code", "code"))),
 }
@@ -108,11 +118,13 @@ class Robot:
 
 ROBOTS = {r.name: r for r in (
     Robot("two_wheel", MODEL_DIR / "two_wheel.xml", "two_wheel",
+          # the body's reading from stage 1 (trial 6): a smaller robot than its file's 1.5
+          readings=(("radius", 1.366638388002404),),
           description="the paper's two-wheel robot as a planar base (slide x, y, hinge yaw)"),
     Robot("floating", MODEL_DIR / "floating.xml", "floating",
-          # the body's readings from the search (trial 126): bouncing walls, a smaller puck
-          readings=(("bump", "bounce"), ("restitution", 0.5577716011437397),
-                    ("radius", 1.3859806771945204)),
+          # the body's readings from stage 1 (trial 9): the literal wall ("moves ... until
+          # it bumps": stopped at the bump), a larger puck than its file's 1.5
+          readings=(("bump", "stop"), ("radius", 2.477124155927907)),
           description="the paper's floating robot as a planar puck (slide x, y)"),
     Robot("diff_drive", MODEL_DIR / "diff_drive.xml", "two_wheel", timestep=0.025,
           integrator="Euler", time_scale=2.5,

@@ -88,6 +88,24 @@ def test_agent_similarity_equals_reference():
     np.testing.assert_allclose(ag.similarities(x), want, rtol=0, atol=1e-12)
 
 
+def test_reciprocal_kernel_against_the_formula_as_written():
+    """The compiled eq 2-4 multiplies by 1 / (2 n_j V_i) (protocol 5) where the formula
+    divides: on Table 1's floating memory (4096 x 10, groups 8 + 2) and on inputs of
+    widely different scales, within the stated 1e-12 of ebrl.similarity; on the
+    hand-computed case of eq 2 exactly 1 - sqrt(0.5)."""
+    rng = np.random.default_rng(7)
+    groups = [np.arange(8), np.arange(8, 10)]
+    for scale in (1e-3, 1.0, 255.0):
+        memory = rng.random((4096, 10)) * scale
+        variance = memory.var(axis=0) + 1e-6
+        x = rng.random(10) * scale
+        want = ebrl.similarity(x, memory, variance, groups, [0.7, 0.3])
+        got = _compiled_similarity(x, memory, variance, groups, [0.7, 0.3])
+        assert np.max(np.abs(got - want)) <= 1e-12
+    s = _compiled_similarity([1.0, 2.0], [[0.0, 4.0]], [1.0, 4.0])
+    assert s[0] == 1 - math.sqrt(0.5)
+
+
 def test_recall_eq1_by_hand():
     """eq 1 on the entries that move along their forward links, then the N_r largest."""
     nxt = np.array([1, -1, 3, -1, -1])

@@ -8,6 +8,7 @@ import pytest
 from experiments.studies import fit, study
 from experiments import paper
 from helpers import ebrl
+import tasks.robots
 
 
 def _group(robot, condition, first, per_trial, goals_min=60, below_30=0, seeds=50):
@@ -77,18 +78,18 @@ def test_the_objective_by_hand_on_a_changed_figure_and_a_failing_claim():
 def test_overrides_keep_agent_readings_for_both_robots_and_drop_defaults():
     floating_reliability = fit.default("initial_reliability")        # the floating robot's
     assert floating_reliability == fit.default("initial_reliability", "floating")
-    assert fit.default("initial_reliability", "two_wheel") == 0.5   # tasks.robots' drives
-    params = {"policy_threshold": 0.3, "bump": "stop",
+    assert fit.default("initial_reliability", "two_wheel") == 1.0   # Table 1's (ebrl.Config)
+    params = {"policy_threshold": 0.3, "bump": "grip",
               "initial_reliability": floating_reliability, "radius": 2.0,
               "thrust": "scaled"}
     # A shared reading is run as given on each robot, left out where it is the robot's own.
     assert fit.overrides(params, "two_wheel") == (("initial_reliability", floating_reliability),
                                                   ("policy_threshold", 0.3))
-    assert fit.overrides(params, "floating") == (("bump", "stop"), ("policy_threshold", 0.3),
+    assert fit.overrides(params, "floating") == (("bump", "grip"), ("policy_threshold", 0.3),
                                                  ("radius", 2.0))
-    params["initial_reliability"] = 0.5
+    params["initial_reliability"] = 1.0
     assert fit.overrides(params, "two_wheel") == (("policy_threshold", 0.3),)
-    assert ("initial_reliability", 0.5) in fit.overrides(params, "floating")
+    assert ("initial_reliability", 1.0) in fit.overrides(params, "floating")
 
 
 def _trials(out):
@@ -109,7 +110,7 @@ def test_a_tiny_study_runs_resumes_and_reaches_the_runs(tmp_path):
     assert [t.number for t in trials] == [0, 1] and all(t.state.name == "COMPLETE" for t in trials)
     # trial 0: the defaults, the floating robot's (tasks.robots)
     assert trials[0].params == {"policy_threshold": fit.default("policy_threshold", "floating"),
-                                "bump": "bounce", "thrust": "scaled", "episode": "trial"}
+                                "bump": "stop", "thrust": "scaled", "episode": "trial"}
     figures = trials[1].user_attrs["rungs"][0]["figures"]
     assert set(figures) == {f"{r}/{c}/{f}" for r in fit.ROBOTS for c in paper.CONDITIONS
                             for f in fit.FIGURES}
@@ -216,9 +217,10 @@ def test_a_first_trial_study_runs_and_validates(tmp_path):
     s = optuna.load_study(study_name="first_trial_two_wheel",
                           storage=study.storage_url(None, out))
     (trial,) = s.trials
-    assert trial.params == {"random_demand": "gaussian", "random_in_avoidance": "replace",
-                            "blocked_move": "stop", "leftover_turn": "commanded",
-                            "radius": 1.5}
+    # trial 0: the robot's own readings (protocol 5's, tasks.robots)
+    assert trial.params == {"random_demand": "uniform_all", "random_in_avoidance": "add",
+                            "blocked_move": "stop", "leftover_turn": "away",
+                            "radius": dict(tasks.robots.ROBOTS["two_wheel"].readings)["radius"]}
     rung = trial.user_attrs["rungs"][0]
     assert rung["seeds"] == list(range(64))
     runs = sorted((out / "runs").glob("*/two_wheel.first_trial/*/seed_*/run.json"))

@@ -17,10 +17,12 @@ def _pair(robot, **fields):
     ("two_wheel", {}),
     ("two_wheel", {"sensor_noise": 0.0, "action_noise": 0.0}),
     ("diff_drive", {}),  # wheels under servos (WheelPhysics)
+    ("two_wheel", {"leftover_turn": "commanded"}),
     ("two_wheel", {"blocked_move": "refuse", "leftover_turn": "away"}),
     ("diff_drive", {"blocked_move": "refuse"}),  # a wheels' state undone
     ("hovercraft", {"bump": "bounce"}),  # a free joint's velocity dofs
-    ("floating", {}),  # bump "bounce"
+    ("floating", {}),  # bump "stop"
+    ("floating", {"bump": "bounce"}),
     ("floating", {"bump": "stop", "velocity_code": "none"}),
     ("floating", {"thrust": "clipped", "bump": "slide"}),
     ("floating", {"thrust": "demand", "action_noise": 0.0}),

@@ -24,7 +24,7 @@ def test_every_command_takes_its_robots_from_the_registry():
     names = [line.split()[0] for line in table.splitlines()[1:]]
     assert names == list(tasks.ROBOTS) and {"diff_drive", "hovercraft"} <= set(names)
     assert [line.split()[0] for line in readings.splitlines()[1:]] == names
-    assert "bump=bounce" in readings and "initial_reliability=0.5" in readings
+    assert "bump=stop" in readings and "leftover_turn=away" in readings
     for command in (["run"], ["sweep"], ["bench"], ["check"],
                     ["render", "--condition", "random", "--seed", "0", "--out", "x.mp4"]):
         proc = ebrl(*command, "--robot", "tricycle")
@@ -104,7 +104,9 @@ def _copy_robot(tmp_path, name, edit=None):
 
 def test_a_robot_file_outside_the_package_loads_and_runs(tmp_path):
     path = _copy_robot(tmp_path, "two_wheel")
-    ours, theirs = tasks.load(str(path), drive="two_wheel", seed=4), tasks.load("two_wheel", seed=4)
+    # the registered robot's body reading (its radius) is its entry's, not its file's
+    ours = tasks.load(str(path), drive="two_wheel", seed=4)
+    theirs = tasks.load("two_wheel", seed=4, radius=None)
     ours.reset(), theirs.reset()
     for a in np.linspace(-1, 1, 25):
         assert ours.step([a]).observation["range"].tolist() == theirs.step([a]).observation["range"].tolist()
@@ -231,28 +233,35 @@ def test_hovercraft_glides_and_a_bump_takes_most_of_its_speed_into_the_wall():
 
 
 def test_a_drives_readings_reach_its_robots_runs_and_set_overrides_them():
-    """Protocol 4's readings (tasks.robots: a drive's, a robot's own on top) are each
+    """Protocol 5's readings (tasks.robots: a drive's, a robot's own on top) are each
     run's config; --set (a spec's overrides) changes any of them."""
     floating = dict(tasks.ROBOTS["floating"].readings)
     spec = protocol.RunSpec("floating", "avoidance", 0, 10)
     agent, task = spec.agent_config(), spec.task_config()
-    assert agent.policy_threshold == floating["policy_threshold"] > 0.4
-    assert (agent.eq9_dead_zone, agent.random_in_avoidance) == ("keep", "add")
-    assert (task.bump, task.radius, task.velocity_code) == ("bounce", floating["radius"], "code")
+    assert agent.policy_threshold == floating["policy_threshold"] > 0
+    assert (agent.eq9_dead_zone, agent.random_in_avoidance, agent.random_demand) == \
+        ("keep", "replace", "uniform_all")
+    assert (task.bump, task.radius, task.velocity_code) == ("stop", floating["radius"], "code")
     assert agent.memory_size == 4096 and task.sensor_noise == 0.05 * 255   # Table 1, 3.2
     # The hovercraft shares the drive's readings, not the planar puck's body.
     hover = protocol.RunSpec("hovercraft", "avoidance", 0, 10)
     assert hover.agent_config() == agent
     assert hover.task_config().action_noise == task.action_noise == floating["action_noise"]
     assert (hover.task_config().bump, hover.task_config().radius) == ("grip", None)
-    # The two-wheel drive: its own reading, the paper's 5% action noise.
+    # The two-wheel drive: its fallback's and move's readings, Table 1's learner, the
+    # paper's 5% action noise; diff_drive keeps its own body (no radius reading).
     two = protocol.RunSpec("diff_drive", "random", 0, 10)
-    assert (two.agent_config().initial_reliability, two.agent_config().policy_threshold) == (0.5, 0.0)
+    assert (two.agent_config().initial_reliability, two.agent_config().policy_threshold) == (1.0, 0.0)
+    assert (two.agent_config().random_demand, two.agent_config().random_in_avoidance) == \
+        ("uniform_all", "add")
+    assert (two.task_config().leftover_turn, two.task_config().radius) == ("away", None)
     assert two.task_config().action_noise == 0.05
+    planar = protocol.RunSpec("two_wheel", "random", 0, 10).task_config()
+    assert planar.radius == dict(tasks.ROBOTS["two_wheel"].readings)["radius"] < 1.5
     over = protocol.RunSpec("floating", "avoidance", 0, 10,
                             (("bump", "grip"), ("policy_threshold", 0.1)))
     assert (over.task_config().bump, over.agent_config().policy_threshold) == ("grip", 0.1)
     assert over.parameters()["task"]["bump"] == "grip"
     env = tasks.load("floating", seed=0)
-    assert env.task.config.bump == "bounce"
+    assert env.task.config.bump == "stop"
     env.close()

@@ -238,7 +238,8 @@ def test_no_robot_ever_ends_inside_an_obstacle(robot):
             env.reset()
         x, y, _ = env.physics.robot_pose()
         worst = min(worst, clearance(x, y))
-    assert worst > RADIUS - 0.3, worst  # the body may sink by a fraction of a unit, no more
+    radius = env.physics.robot_radius  # the robot's (its readings' radius, tasks.robots)
+    assert worst > radius - 0.3, worst  # the body may sink by a fraction of a unit, no more
     env.close()
 
 

@@ -15,7 +15,7 @@ import numpy as np
 import ebrl
 
 #: Bump when a change alters what a run computes, so stale results are not reused.
-PROTOCOL_VERSION = 4  # 4: the adopted readings per drive, diff_drive's Euler; 3: float64 similarity
+PROTOCOL_VERSION = 5  # 5: stage 1's readings, eq 2-4 by reciprocals; 4: the adopted readings per drive, diff_drive's Euler; 3: float64 similarity
 #: Positions are stored as int16 hundredths of a unit.
 TRACE_SCALE = 100.0
 #: The end of a first-trial run's label (RunSpec.first_trial): "two_wheel.first_trial".
@@ -97,26 +97,13 @@ class RunSpec:
             "seed": self.seed,
             "steps": self.steps,
             "learner": self.agent,
-            "agent": _recorded(dataclasses.asdict(self.agent_config())),
+            "agent": dataclasses.asdict(self.agent_config()),
             "avoidance": entry.avoidance,
             "modalities": [list(m) for m in entry.modalities],
-            "task": _recorded(dataclasses.asdict(task)),
+            "task": dataclasses.asdict(task),
             "model_sha256": model_digest(entry, task),
         } | ({} if self.behaviour is None else {"behaviour": _genome_dict(self.behaviour)}) \
           | ({"first_trial": True} if self.first_trial else {})
-
-
-#: Readings added since PROTOCOL_VERSION 4, with their defaults (which compute what the
-#: code computed before them, bit for bit): a run's parameters name one only when it is
-#: set otherwise, so the runs on disk still match.
-UNRECORDED_DEFAULTS = {"random_demand": "gaussian", "blocked_move": "stop",
-                       "leftover_turn": "commanded"}
-
-
-def _recorded(fields):
-    """A config's fields as a run's parameters record them (UNRECORDED_DEFAULTS left out)."""
-    return {k: v for k, v in fields.items()
-            if not (k in UNRECORDED_DEFAULTS and v == UNRECORDED_DEFAULTS[k])}
 
 
 def _genome_dict(genome):

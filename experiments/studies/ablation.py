@@ -16,7 +16,7 @@ from ebrl.config import READINGS as AGENT_READINGS
 from experiments import paper
 from experiments.outputs import report
 from experiments.running import results, runner
-from tasks.config import BUMPS
+from tasks.config import BLOCKED_MOVES, BUMPS, LEFTOVER_TURNS
 
 
 @dataclasses.dataclass(frozen=True)
@@ -29,7 +29,7 @@ class Reading:
 
 
 #: The switches' values come from where they are defined (ebrl.config.READINGS,
-#: tasks.config.BUMPS); the numbers tried for the numeric ones are the ablation's own.
+#: tasks.config.BUMPS, BLOCKED_MOVES, LEFTOVER_TURNS); the numbers tried for the numeric ones are the ablation's own.
 READINGS = (
     Reading("bump", BUMPS, drives=("floating",),
             what="the floating robot at a wall"),
@@ -37,6 +37,12 @@ READINGS = (
             what="eq 9's 'not changed': zero acceleration, or the previous one kept"),
     Reading("random_in_avoidance", AGENT_READINGS["random_in_avoidance"], conditions=("avoidance",),
             what="the 20% random action replaces, or is added to, the avoidance action"),
+    Reading("random_demand", AGENT_READINGS["random_demand"],
+            what="a random action's demand: Gaussian, or uniform for the walk or for all"),
+    Reading("blocked_move", BLOCKED_MOVES, drives=("two_wheel",),
+            what="a blocked two-wheel move stops at contact, or is refused whole"),
+    Reading("leftover_turn", LEFTOVER_TURNS, drives=("two_wheel",),
+            what="a blocked move's rest turns the commanded way, or away from the nearer side"),
     Reading("episode", AGENT_READINGS["episode"],
             what="an episode is one trial, or one continuing episode across trials"),
     Reading("recall_at_trial_end", AGENT_READINGS["recall_at_trial_end"], what="the recall table at a trial's end"),
