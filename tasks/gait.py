@@ -2,7 +2,8 @@
 
 Action a in [-1, 1], as tasks.two_wheel: turn |a| rad (a < 0 left), then move 2 (1 - |a|)
 units along the new heading; a move that a wall stops is finished as a turn in the same
-direction, at 1 rad per 2 units; each part scaled by the action noise. A legged body has
+direction (or away from the nearer side, with leftover_turn="away"), at 1 rad per 2 units;
+each part scaled by the action noise. A legged body has
 no velocity servo to command: a hand-built central pattern generator (CPG) walks it, with
 heading feedback. No learned policy.
 
@@ -185,6 +186,8 @@ class Gait(navigation.Navigation):
     action_dim = 1
 
     def initialize_episode(self, physics):
+        if self.config.blocked_move != "stop":  # a walked step cannot be put back
+            raise ValueError("the gait drive has blocked_move=stop only")
         # an agent step's nominal seconds (the velocity read-out's unit): the longest
         # turn and move
         g = physics.gait
@@ -231,6 +234,8 @@ class Gait(navigation.Navigation):
         x, y, _ = physics.robot_pose()
         rest = move - ((x - x0) * c + (y - y0) * s)
         if rest > two_wheel.BLOCKED_TOLERANCE:
+            if self.config.leftover_turn == "away":  # as two_wheel.TwoWheel.after_step
+                sign = kernels.away_sign(physics.ranges(), sign)
             self._turn(physics, sign * rest * MAX_TURN / MAX_MOVE)
 
     def after_step(self, physics):

@@ -33,6 +33,7 @@ CASES = [
     (["run", "--condition", "lazy"], "lazy"),
     (["run", "--backend", "mpi"], "mpi"),
     (["run", "--set", "colour=3"], "colour"),
+    (["run", "--robot", "ant", "--set", "blocked_move=refuse"], "blocked_move=stop only"),
     (["run", "--set", "alpha"], "NAME=VALUE"),
     (["run", "--frobnicate"], "unrecognized arguments"),
     (["run", "extra"], "unrecognized arguments"),

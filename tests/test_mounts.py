@@ -245,6 +245,24 @@ def test_the_ant_walks_the_two_wheel_actions_within_its_stated_limits():
     assert r["falls"] == 0 and r["nan_steps"] == 0 and r["warnings"] == 0
 
 
+@pytest.mark.parametrize("leftover_turn,way", [("commanded", -1.0), ("away", 1.0)])
+def test_the_gait_turns_a_blocked_moves_rest_the_way_its_reading_says(leftover_turn, way):
+    """a = 0 into the east wall with the south wall close on the right: "commanded" turns
+    the rest clockwise (a = 0's fixed way), "away" counter-clockwise, away from the nearer
+    (right) side, as tasks.two_wheel does; about 1 rad per 2 units of the move's rest."""
+    env = tasks.load("ant", seed=0, sensor_noise=0.0, action_noise=0.0, start_jitter=False,
+                     leftover_turn=leftover_turn)
+    try:
+        env.reset()
+        r = env.physics.robot_radius
+        env.physics.set_robot_pose(90.0 - r - 0.4, r + 0.8, 0.0)
+        env.step([0.0])
+        _, _, heading = env.physics.robot_pose()
+        assert way * heading > 0.3, heading
+    finally:
+        env.close()
+
+
 def test_a_fall_of_the_gait_is_a_physics_error():
     from dm_control.rl import control
     env = tasks.load("ant", seed=0)

@@ -117,9 +117,13 @@ def agent_configs(robots, overrides, drive=None, agent="ebrl"):
         spec = protocol.RunSpec(robot, "random", 0, 1, tuple(sorted(overrides.items())),
                                 drive, agent)
         try:
-            spec.task_config()
+            task = spec.task_config()
         except (TypeError, ValueError) as e:
             raise ValueError(f"task parameters {shown}: {e}") from None
+        mount = spec.entry.mount
+        if mount is not None and mount.action[0] == "gait" and task.blocked_move != "stop":
+            raise ValueError(f"task parameters {shown}: {robot} walks by the gait drive, "
+                             "which has blocked_move=stop only (a walked step cannot be put back)")
         try:
             spec.agent_config()
         except (TypeError, ValueError) as e:
