@@ -78,11 +78,11 @@ def test_sensors_once_per_step_read_as_sensors_every_substep():
 
 def test_planar_trajectories_unchanged_by_the_registry():
     """The first 3,000 steps of seeds 0-1, every paper robot and condition, as the full
-    run behind RESULTS.md made them (tests/data/planar_traces_v<PROTOCOL_VERSION>.npz;
-    protocol 4's readings changed the floating runs and one two-wheel avoidance run). Bit
-    for bit on one kind of machine: the file was remade on this project's current kind,
-    where one run parts from the previous kind's by a hundredth of a unit at step 2,831
-    (numpy's BLAS and math kernels round the last bit per CPU; same code, same seeds)."""
+    run behind RESULTS.md made them (tests/data/planar_traces_v<PROTOCOL_VERSION>.npz,
+    cut from protocol 5's clean-clone run; protocol 5's readings and eq 2-4's reciprocals
+    changed every run). Bit for bit on one kind of machine: numpy's BLAS and math kernels
+    round the last bit per CPU (same code, same seeds), so on another kind a run may part
+    from these by a hundredth of a unit after some thousands of steps."""
     with np.load(ROOT / "tests" / "data" / f"planar_traces_v{protocol.PROTOCOL_VERSION}.npz") as z:
         expected = {k: z[k] for k in z.files}
     for key, trace in expected.items():
