@@ -45,6 +45,25 @@ def clean_run(tmp_path_factory):
     return out
 
 
+def test_claim_odds_draws_seeds_and_judges_each_draw_as_the_report(clean_run):
+    """examples/claim_odds.py, run as a user would: a draw of every seed is the report's
+    own verdicts (each share 0 or 1, the same as report.claims on the whole folder); more
+    seeds than every group has is one line and exit status 1."""
+    from experiments.outputs import report
+    from experiments.running import results
+    want = {c: float(ok) for c, _, ok in report.claims(results.summarize(results.load_runs(clean_run)))}
+    script = [sys.executable, "examples/claim_odds.py", str(clean_run)]
+    proc = subprocess.run(script + ["--seeds", "2", "--draws", "3"], cwd=ROOT,
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    lines = proc.stdout.splitlines()
+    assert lines[0] == "3 draws of 2 seeds from the 2 seeds every group has:"
+    got = {line.split("%", 1)[1].strip(): float(line.split("%")[0]) / 100 for line in lines[1:]}
+    assert got == want and want
+    bad = subprocess.run(script + ["--seeds", "3"], cwd=ROOT, capture_output=True, text=True)
+    assert bad.returncode == 1 and "only 2 seeds" in bad.stderr
+
+
 def test_a_short_run_writes_every_file(clean_run):
     runs = sorted(clean_run.glob("*/*/seed_*"))
     assert len(runs) == 8
