@@ -84,9 +84,12 @@ def pathlib_path(resource):
 
 def test_a_mount_of_our_own_two_wheel_file_runs_bit_for_bit_as_the_registered_robot(tmp_path):
     """Full protocol runs (both conditions, 1,500 steps) of a mount of models/two_wheel.xml
-    equal the registered robot's trace and trial ends, bit for bit."""
+    with the registered robot's body reading (its radius, tasks.robots) equal the
+    registered robot's trace and trial ends, bit for bit."""
     path = tmp_path / "mine.toml"
-    path.write_text(CONTRACT_MOUNT.format(file=ROOT / "models" / "two_wheel.xml"))
+    radius = dict(tasks.ROBOTS["two_wheel"].readings)["radius"]
+    path.write_text(CONTRACT_MOUNT.format(file=ROOT / "models" / "two_wheel.xml")
+                    + f"[readings]\nradius = {radius!r}\n")
     for condition in ("random", "avoidance"):
         mine = protocol.execute(protocol.RunSpec(str(path), condition, 3, 1500))
         ours = protocol.execute(protocol.RunSpec("two_wheel", condition, 3, 1500))
