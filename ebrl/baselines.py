@@ -40,6 +40,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ebrl.config import READINGS, check_reading
 from ebrl.similarity import modalities
 
 __all__ = ["QTableConfig", "QTable", "MFECConfig", "MFEC", "AGENTS", "discrete_actions",
@@ -83,10 +84,29 @@ def _check_shared(cfg):
     _check_int(cfg, "action_levels", 2)
     _check_range(cfg, "intrinsic_random_rate", 0.0, 1.0)
     _check_positive(cfg, "random_sd")
+    for name in FALLBACK_SWITCHES:
+        check_reading(name, getattr(cfg, name))
+
+
+#: The fallback's switches (ebrl.config.READINGS), fields of both configs as of
+#: ebrl.Config, so that a drive's readings of the intrinsic behaviour reach every learner.
+FALLBACK_SWITCHES = ("eq9_dead_zone", "random_in_avoidance", "random_demand")
 
 
 @dataclasses.dataclass(frozen=True)
-class QTableConfig:
+class _Fallback:
+    """Section 3.4's intrinsic behaviour, for the fallback the caller builds
+    (intrinsic.fallback_for), with ebrl.Config's fields and defaults: every learner gets
+    the same behaviour, a drive's readings of it included (tasks.robots)."""
+    intrinsic_random_rate: float = 0.2
+    random_sd: float = 0.5
+    eq9_dead_zone: str = READINGS["eq9_dead_zone"][0]
+    random_in_avoidance: str = READINGS["random_in_avoidance"][0]
+    random_demand: str = READINGS["random_demand"][0]
+
+
+@dataclasses.dataclass(frozen=True)
+class QTableConfig(_Fallback):
     alpha: float = 0.1             # Q-learning step size
     discount: float = 0.99         # gamma, as Table 1's
     temperature: float = 0.01      # Boltzmann tau, in units of Q (reward 1 at the goal)
@@ -97,9 +117,6 @@ class QTableConfig:
     near_edge: float = 0.5         # at or above this "near" (under half the sensor range)
     velocity_edge: float = 0.2     # |v| at most this is "still", per axis (later groups)
     action_levels: int = 5         # discrete actions for action_dim 1
-    # Section 3.4, for the fallback the caller builds (fallback_for), as in ebrl.Config.
-    intrinsic_random_rate: float = 0.2
-    random_sd: float = 0.5
 
     def __post_init__(self):
         _check_range(self, "alpha", 0.0, 1.0, lo_open=True)
@@ -116,7 +133,7 @@ class QTableConfig:
 
 
 @dataclasses.dataclass(frozen=True)
-class MFECConfig:
+class MFECConfig(_Fallback):
     memory_size: int = 1024        # entries per discrete action (least recently used go)
     neighbours: int = 11           # k of the k-NN estimate, as Blundell et al.
     discount: float = 0.99         # gamma of the trial's returns, as Table 1's
@@ -124,9 +141,6 @@ class MFECConfig:
     value_threshold: float = 0.0   # ... and the chosen action's estimate exceeds this
     exploration_rate: float = 0.05  # the fallback acts anyway, as Table 1's
     action_levels: int = 5         # discrete actions for action_dim 1
-    # Section 3.4, for the fallback the caller builds (fallback_for), as in ebrl.Config.
-    intrinsic_random_rate: float = 0.2
-    random_sd: float = 0.5
 
     def __post_init__(self):
         _check_int(self, "memory_size", 1)

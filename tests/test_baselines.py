@@ -374,13 +374,35 @@ def test_same_seed_same_actions_floating_like(name):
 
 @pytest.mark.parametrize("name", ["qtable", "mfec"])
 def test_configs_are_numbers_for_set(name):
-    """Every field is an int or a float with a default, as `--set NAME=VALUE` needs."""
+    """Every field is an int or a float with a default, as `--set NAME=VALUE` needs, or
+    one of the fallback's switches (ebrl.config.READINGS, a string as in ebrl.Config)."""
+    from ebrl.config import READINGS
     config_class, _ = AGENTS[name]
     default = config_class()
     for f in dataclasses.fields(config_class):
-        assert type(getattr(default, f.name)) in (int, float), f.name
+        v = getattr(default, f.name)
+        assert type(v) in (int, float) or v == READINGS[f.name][0], f.name
     with pytest.raises(dataclasses.FrozenInstanceError):
         default.discount = 0.5
+    with pytest.raises(ValueError, match="random_demand must be one of"):
+        config_class(random_demand="wide")
+
+
+@pytest.mark.parametrize("name", ["qtable", "mfec"])
+def test_a_baseline_runs_the_drives_intrinsic_behaviour(name):
+    """The fallback's readings of a drive (tasks.robots) reach every learner: a baseline's
+    first trial, before any reward, is EBRL's on the same seed, bit for bit."""
+    from experiments.running import protocol
+    # seeds whose first goal comes early (tests/test_first_trial.py)
+    for robot, condition, seed in (("floating", "avoidance", 19), ("two_wheel", "random", 32)):
+        ebrl_spec = protocol.RunSpec(robot, condition, seed, 1000, first_trial=True)
+        mine = protocol.RunSpec(robot, condition, seed, 1000, agent=name, first_trial=True)
+        a, b = ebrl_spec.agent_config(), mine.agent_config()
+        for k in ("eq9_dead_zone", "random_in_avoidance", "random_demand"):
+            assert getattr(a, k) == getattr(b, k), k
+        ours, theirs = protocol.execute(ebrl_spec), protocol.execute(mine)
+        assert ours["trial_ends"].tolist() == theirs["trial_ends"].tolist() != []
+        assert ours["trace"].tobytes() == theirs["trace"].tobytes()
 
 
 @pytest.mark.parametrize("name,field,value", [

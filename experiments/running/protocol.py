@@ -155,10 +155,10 @@ def make_agent(spec, env):
         weights = [w for _, w in entry.modalities]
     _, agent_seed = seeds_for(spec.seed)
     config = spec.agent_config()
-    # The fallback's own readings, where the learner's config has them (EBRL's does; the
-    # baselines take fallback_for's defaults, which are EBRL's defaults).
+    # The fallback's own readings: fields of every learner's config (ebrl.Config, the
+    # baselines' ebrl.baselines._Fallback), so the drive's readings reach every learner.
     switches = {k: getattr(config, k) for k in ("eq9_dead_zone", "random_in_avoidance",
-                                                 "random_demand") if hasattr(config, k)}
+                                                 "random_demand")}
     if spec.behaviour is not None:
         switches.pop("eq9_dead_zone", None)  # the genome's hold decides
         fallback = ebrl.behaviour.fallback(spec.behaviour, spec.condition, **switches)
