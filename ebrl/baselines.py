@@ -40,7 +40,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ebrl.config import READINGS, check_reading
+from ebrl.config import FALLBACK_READINGS, READINGS, check_reading
 from ebrl.similarity import modalities
 
 __all__ = ["QTableConfig", "QTable", "MFECConfig", "MFEC", "AGENTS", "discrete_actions",
@@ -84,13 +84,8 @@ def _check_shared(cfg):
     _check_int(cfg, "action_levels", 2)
     _check_range(cfg, "intrinsic_random_rate", 0.0, 1.0)
     _check_positive(cfg, "random_sd")
-    for name in FALLBACK_SWITCHES:
+    for name in FALLBACK_READINGS:
         check_reading(name, getattr(cfg, name))
-
-
-#: The fallback's switches (ebrl.config.READINGS), fields of both configs as of
-#: ebrl.Config, so that a drive's readings of the intrinsic behaviour reach every learner.
-FALLBACK_SWITCHES = ("eq9_dead_zone", "random_in_avoidance", "random_demand")
 
 
 @dataclasses.dataclass(frozen=True)

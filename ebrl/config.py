@@ -37,6 +37,12 @@ READINGS = {
 }
 
 
+#: The readings that belong to the fallback (Section 3.4's intrinsic behaviour), not to
+#: the learner: every learner's config has them (ebrl.Config; ebrl.baselines._Fallback),
+#: and the runner builds the fallback with them (protocol.make_agent).
+FALLBACK_READINGS = ("eq9_dead_zone", "random_in_avoidance", "random_demand")
+
+
 def check_reading(name, value):
     """value if it is one of READINGS[name]'s values, else ValueError naming both."""
     valid = READINGS[name]

@@ -69,13 +69,11 @@ def similarities(x, inputs, size, variance, group_of, group_size, group_weight, 
     the formula as written (`ebrl.similarity`) in the last bits: within 1e-12 of it
     (tests/test_ebrl_equations.py).
     """
-    groups, n = group_weight.shape[0], x.shape[0]
-    scale = np.empty(n)
-    for i in range(n):
-        scale[i] = 1.0 / (2.0 * group_size[group_of[i]] * variance[i])
+    groups = group_weight.shape[0]
     radicand = np.zeros((groups, size))
-    for i in range(n):
-        acc, row, xi, c = radicand[group_of[i]], inputs[i], x[i], scale[i]
+    for i in range(x.shape[0]):
+        j = group_of[i]
+        acc, row, xi, c = radicand[j], inputs[i], x[i], 1.0 / (2.0 * group_size[j] * variance[i])
         for m in range(size):
             d = xi - row[m]
             acc[m] += d * d * c

@@ -96,7 +96,8 @@ def main(argv=None):
     for claim, share in shares.items():
         print(f"  {share:6.1%}  {claim}")
     if args.paper:
-        drives = sorted({run["parameters"].get("drive") for run in runs.values()} & {"two_wheel", "floating"})
+        drives = sorted({run["parameters"].get("drive") for run in runs.values()}
+                        & {drive for drive, _ in paper.RESULTS})
         for drive in drives:
             for condition, share in paper_odds(drive, args.seeds, args.draws).items():
                 print(f"  {share:6.1%}  the paper's own {drive} {condition} figures: "

@@ -180,14 +180,21 @@ class Physics(navigation.Physics):
         return math.atan2(r[3], r[0])
 
 
+def check_config(config):
+    """ValueError for a task reading the gait cannot run: a refused move (a walked step
+    cannot be put back)."""
+    if config.blocked_move != "stop":
+        raise ValueError("the gait drive has blocked_move=stop only (a walked step cannot "
+                         "be put back)")
+
+
 class Gait(navigation.Navigation):
     """The two-wheel action family through the CPG (see the module's docstring)."""
 
     action_dim = 1
 
     def initialize_episode(self, physics):
-        if self.config.blocked_move != "stop":  # a walked step cannot be put back
-            raise ValueError("the gait drive has blocked_move=stop only")
+        check_config(self.config)
         # an agent step's nominal seconds (the velocity read-out's unit): the longest
         # turn and move
         g = physics.gait
@@ -234,8 +241,7 @@ class Gait(navigation.Navigation):
         x, y, _ = physics.robot_pose()
         rest = move - ((x - x0) * c + (y - y0) * s)
         if rest > two_wheel.BLOCKED_TOLERANCE:
-            if self.config.leftover_turn == "away":  # as two_wheel.TwoWheel.after_step
-                sign = kernels.away_sign(physics.ranges(), sign)
+            sign = two_wheel.leftover_sign(self.config, physics, sign)
             self._turn(physics, sign * rest * MAX_TURN / MAX_MOVE)
 
     def after_step(self, physics):

@@ -130,9 +130,7 @@ class TwoWheel(navigation.Navigation):
         x0, y0, c, s = self._from
         rest = self._move - ((x - x0) * c + (y - y0) * s)
         if rest > BLOCKED_TOLERANCE:
-            sign = self._turn_sign
-            if self.config.leftover_turn == "away":
-                sign = kernels.away_sign(physics.ranges(), sign)
+            sign = leftover_sign(self.config, physics, self._turn_sign)
             if self.config.blocked_move == "refuse":
                 data = physics.data.ptr
                 physics.restore_state(self._saved)
@@ -146,6 +144,15 @@ class TwoWheel(navigation.Navigation):
             physics.step(self._n_turn)
         physics.halt()
         super().after_step(physics)
+
+
+def leftover_sign(config, physics, commanded):
+    """The way a blocked move's rest turns (counter-clockwise +1): the commanded turn's,
+    or with leftover_turn "away" away from the nearer side at the blocked pose
+    (kernels.away_sign). The hooks' reading, for every two-wheel action family's task."""
+    if config.leftover_turn == "away":
+        return kernels.away_sign(physics.ranges(), commanded)
+    return commanded
 
 
 def move_substeps(timestep, time_scale=1.0):

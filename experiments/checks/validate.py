@@ -121,9 +121,12 @@ def agent_configs(robots, overrides, drive=None, agent="ebrl"):
         except (TypeError, ValueError) as e:
             raise ValueError(f"task parameters {shown}: {e}") from None
         mount = spec.entry.mount
-        if mount is not None and mount.action[0] == "gait" and task.blocked_move != "stop":
-            raise ValueError(f"task parameters {shown}: {robot} walks by the gait drive, "
-                             "which has blocked_move=stop only (a walked step cannot be put back)")
+        if mount is not None and mount.action[0] == "gait":
+            from tasks import gait
+            try:
+                gait.check_config(task)
+            except ValueError as e:
+                raise ValueError(f"task parameters {shown}: {robot}: {e}") from None
         try:
             spec.agent_config()
         except (TypeError, ValueError) as e:

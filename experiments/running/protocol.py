@@ -157,8 +157,7 @@ def make_agent(spec, env):
     config = spec.agent_config()
     # The fallback's own readings: fields of every learner's config (ebrl.Config, the
     # baselines' ebrl.baselines._Fallback), so the drive's readings reach every learner.
-    switches = {k: getattr(config, k) for k in ("eq9_dead_zone", "random_in_avoidance",
-                                                 "random_demand")}
+    switches = {k: getattr(config, k) for k in ebrl.config.FALLBACK_READINGS}
     if spec.behaviour is not None:
         switches.pop("eq9_dead_zone", None)  # the genome's hold decides
         fallback = ebrl.behaviour.fallback(spec.behaviour, spec.condition, **switches)
