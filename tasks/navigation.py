@@ -57,6 +57,10 @@ def encode_range(distance, noise=_NO_NOISE, sensor_range=TaskConfig.sensor_range
                    -SENSOR_LEVELS / sensor_range)
 
 
+#: The contract's word on a robot without its bumper.
+NO_HULL = "no geom named 'hull' (the bumper; its radius is the robot's)"
+
+
 def edit_model(spec, config):
     """The task config's changes to the composed model (an MjSpec): the robot's radius."""
     if config.radius is not None:
@@ -66,7 +70,7 @@ def edit_model(spec, config):
             geom = spec.geom(PREFIX + spec_name(spec, name))
             if geom is None:
                 if part:
-                    raise ContractError("no geom named 'hull' (the bumper; its radius is the robot's)")
+                    raise ContractError(NO_HULL)
                 continue
             geom.size[0] = config.radius * unit
 
@@ -86,9 +90,20 @@ def substeps(seconds, timestep):
 
 def named_id(model, kind, name):
     """The id of the robot's part with a contract name (its prefixed MJCF name, or its
-    file's name where a mount maps it: models.contract_names), -1 for none."""
-    name = contract_names(model).get(name, name) if model.ptr.ntext else name
-    return mujoco.mj_name2id(model.ptr, kind, PREFIX + name)
+    file's name where a mount maps it: models.contract_names), -1 for none. model: an
+    MjModel or dm_control's wrapper."""
+    m = getattr(model, "ptr", model)
+    name = contract_names(m).get(name, name) if m.ntext else name
+    return mujoco.mj_name2id(m, kind, PREFIX + name)
+
+
+def robot_radius(model):
+    """The robot's radius in units: its hull's (sphere or cylinder) radius, from a
+    compiled room (an MjModel or dm_control's wrapper); ContractError without a hull."""
+    hull = named_id(model, mujoco.mjtObj.mjOBJ_GEOM, "hull")
+    if hull < 0:
+        raise ContractError(NO_HULL)
+    return getattr(model, "ptr", model).geom_size[hull, 0] / unit_of(model)
 
 
 class Physics(dm_mujoco.Physics):
@@ -107,11 +122,8 @@ class Physics(dm_mujoco.Physics):
         self._base = named_id(m, mujoco.mjtObj.mjOBJ_BODY, "base")
         if self._base < 0:
             raise ContractError("no body named 'base' (the robot's base body)")
-        hull = named_id(m, mujoco.mjtObj.mjOBJ_GEOM, "hull")
-        if hull < 0:
-            raise ContractError("no geom named 'hull' (the bumper; its radius is the robot's)")
         #: The robot's radius in units: its hull's (sphere or cylinder) radius.
-        self.robot_radius = m.geom_size[hull, 0] / unit
+        self.robot_radius = robot_radius(m)
         beams = np.flatnonzero(m.sensor_type == mujoco.mjtSensor.mjSENS_RANGEFINDER)
         if not len(beams):
             raise ContractError("no rangefinder sensors")

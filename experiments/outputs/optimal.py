@@ -166,11 +166,13 @@ def optimal(robot, drive=None):
     plan, steps_lower a bound no trial can beat."""
     import models
     import tasks
+    from tasks import navigation
     entry = tasks.resolve(robot, drive)
-    env = tasks.load(entry, seed=0)
-    field, obstacles, goal, start = models.room_layout(env.physics.model)
-    radius = env.physics.robot_radius
-    env.close()
+    # the compiled room alone (as tasks.load compiles it, with the robot's readings): no
+    # environment, so a report loads none of the drive's compiled kernels
+    model, _ = tasks.compile_robot(entry, entry.task_config())
+    field, obstacles, goal, start = models.room_layout(model)
+    radius = navigation.robot_radius(model)
     length, path = shortest_path(start[:2], field, obstacles, goal, radius)
     if entry.drive == "two_wheel":
         steps = lower = two_wheel_steps(path, start[2])
