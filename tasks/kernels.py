@@ -27,6 +27,7 @@ The random draws stay NumPy's (the task's RandomState): the caller draws the act
 noise's two uniforms and the sensor noise's normals, in the order the hooks draw them,
 and passes them in.
 """
+import contextlib
 import ctypes
 import glob
 import math
@@ -42,6 +43,28 @@ _LIBRARY = sorted(glob.glob(os.path.join(os.path.dirname(mujoco.__file__), "libm
 if not _LIBRARY:  # pragma: no cover - every mujoco wheel for Linux ships it
     raise ImportError("libmujoco.so not found beside the mujoco package")
 binding.load_library_permanently(_LIBRARY[0])
+
+#: MuJoCo's timer callback, the C global mjcb_time of the library loaded above (one
+#: handle per process: dlopen gives the mujoco package's own).
+_TIMER_CALLBACK = ctypes.c_void_p.in_dll(ctypes.CDLL(_LIBRARY[0]), "mjcb_time")
+
+
+@contextlib.contextmanager
+def stage_timers_off():
+    """MuJoCo's stage timers off inside the block, the previous callback back after it.
+
+    The mujoco package sets mjcb_time at import (a clock for mjData.timer, its profiler's
+    read-out), and every mj_step then reads the clock about twenty times, once at each
+    stage's start and end: 10-15% of a planar robot's step (docs/speed.md). The timers
+    only fill mjData.timer, which nothing here reads, so every other value stays the
+    same bit for bit (tests/test_kernels.py)."""
+    previous = _TIMER_CALLBACK.value
+    _TIMER_CALLBACK.value = None
+    try:
+        yield
+    finally:
+        _TIMER_CALLBACK.value = previous
+
 
 _P = types.uintp  # a pointer, as an integer (the C ABI passes both in one register)
 mj_step = types.ExternalFunction("mj_step", types.void(_P, _P))

@@ -1,4 +1,6 @@
 """The tasks' compiled step (tasks.kernels) against dm_control's hooks, step for step."""
+import contextlib
+
 import mujoco
 import numpy as np
 import pytest
@@ -119,3 +121,34 @@ def test_the_contact_views_read_mujocos_contacts():
     assert d.ncon == 0 and not kernels.hull_normal(ncon, floats, ints, layout,
                                                    hull_id, np.zeros(2))
     env.close()
+
+
+@pytest.mark.parametrize("robot", ["two_wheel", "floating"])
+def test_stage_timers_off_changes_nothing_but_the_timers(robot):
+    """MuJoCo's timer callback (set by the mujoco package) fills mjData.timer and nothing
+    else: with it off the same steps give the same state bit for bit, the timers do not
+    advance, and the callback is back after the block."""
+    before = kernels._TIMER_CALLBACK.value
+    assert before is not None  # the mujoco package sets one at import
+    runs = []
+    for off in (False, True):
+        env = tasks.load(robot, seed=5)
+        env.reset()
+        rng = np.random.default_rng(1)
+        position = env.physics.data.timer[mujoco.mjtTimer.mjTIMER_POSITION]  # mj_step1's
+        start = position.duration
+        with kernels.stage_timers_off() if off else contextlib.nullcontext():
+            if off:
+                assert kernels._TIMER_CALLBACK.value is None
+            obs = [env.step(rng.uniform(-1, 1, env.action_spec().shape)).observation
+                   for _ in range(200)]
+        timed = position.duration - start
+        runs.append((obs, env.physics.data.qpos.tobytes(), env.physics.data.qvel.tobytes(),
+                     env.physics.robot_pose(), timed))
+        env.close()
+    assert kernels._TIMER_CALLBACK.value == before
+    (obs_on, *state_on, timed_on), (obs_off, *state_off, timed_off) = runs
+    assert state_on == state_off
+    for a, b in zip(obs_on, obs_off):
+        assert a.keys() == b.keys() and all(a[k].tobytes() == b[k].tobytes() for k in a)
+    assert timed_on > 0 and timed_off == 0

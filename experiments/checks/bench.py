@@ -9,6 +9,7 @@ pass over a full memory (one matrix-vector product and the top-N_r selection). T
 column "tasks" is env.step less the raw physics: the tasks' own work around MuJoCo.
 "fused loop" is the protocol's own loop, `ebrl run`'s: the same steps in stretches of
 one compiled call each (experiments.running.fused), timed over blocks of N steps after the rest.
+Everything runs with MuJoCo's stage timers off, as a run does (tasks.kernels.stage_timers_off).
 """
 import statistics
 import time
@@ -87,8 +88,10 @@ def measure(robot, steps, blocks=5):
 
 
 def main(steps=2000, blocks=5, robots=None):
+    from tasks.kernels import stage_timers_off
     from tasks.robots import ROBOTS
-    rows = [measure(robot, steps, blocks) for robot in (robots or tuple(ROBOTS))]
+    with stage_timers_off():  # as `ebrl run` steps (protocol.execute), raw physics too
+        rows = [measure(robot, steps, blocks) for robot in (robots or tuple(ROBOTS))]
     print(f"microseconds per agent step, memory full: medians of {blocks} blocks of {steps} steps")
     head = ("robot", "memory", "substeps", "raw physics", "env.step", "tasks", "env/raw",
             "ref pass", "agent", "agent/ref", "whole loop", "loop/(raw+ref)", "fused loop",

@@ -292,6 +292,7 @@ def execute(spec, on_step=None, fused=True):
     one compiled call each (Trials); fused=False forces the step-by-step loop.
     """
     import tasks
+    from tasks.kernels import stage_timers_off
 
     env_seed, _ = seeds_for(spec.seed)
     env = tasks.load(spec.entry, seed=env_seed, config=spec.task_config())
@@ -300,7 +301,8 @@ def execute(spec, on_step=None, fused=True):
     started = time.perf_counter()
     trials = Trials(env, agent, keys, spec.steps, fused=fused, on_step=on_step,
                     trials=1 if spec.first_trial else None)
-    trials.run(spec.steps)
+    with stage_timers_off():
+        trials.run(spec.steps)
     seconds = time.perf_counter() - started
     env.close()
     return {
