@@ -7,6 +7,7 @@ import dataclasses
 
 import models  # first: it imports MuJoCo and dm_control with rendering off (tasks.render)
 
+import ebrl.compiled  # noqa: E402,F401  before the kernels: numba's cache knows what each compiles in
 import dm_env  # noqa: E402
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
