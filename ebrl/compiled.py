@@ -40,13 +40,15 @@ def _tracked(path):
 def _module_file(value):
     """The source file of the module that defines `value` (a module, a compiled
     function, a function or a class), or None."""
-    if isinstance(value, types.ModuleType):
-        return getattr(value, "__file__", None)
-    py_func = getattr(value, "py_func", None)  # a numba dispatcher
-    if py_func is not None:
-        value = py_func
-    module = sys.modules.get(getattr(value, "__module__", None) or "")
-    return getattr(module, "__file__", None) if module is not None else None
+    try:
+        if isinstance(value, types.ModuleType):
+            return getattr(value, "__file__", None)
+        value = getattr(value, "py_func", None) or value  # a numba dispatcher's function
+        name = getattr(value, "__module__", None)
+    except Exception:  # an object whose attribute lookup misbehaves: not a dependency
+        return None
+    module = sys.modules.get(name) if isinstance(name, str) else None
+    return getattr(module, "__file__", None)
 
 
 @functools.lru_cache(maxsize=None)
