@@ -29,12 +29,17 @@ from numba.core import caching
 _INSTALLED = tuple(sorted({os.path.realpath(p) + os.sep for key in
                            ("stdlib", "platstdlib", "purelib", "platlib")
                            if (p := sysconfig.get_paths().get(key))}))
+#: Folders of installed packages wherever they are (a user's, a system's).
+_PACKAGE_FOLDERS = {"site-packages", "dist-packages"}
 
 
 def _tracked(path):
-    """True for a source file outside the Python installation."""
-    return (path is not None and path.endswith(".py")
-            and not os.path.realpath(path).startswith(_INSTALLED))
+    """True for a source file outside the Python installation and any installed
+    package's folder."""
+    if path is None or not path.endswith(".py"):
+        return False
+    real = os.path.realpath(path)
+    return not real.startswith(_INSTALLED) and _PACKAGE_FOLDERS.isdisjoint(real.split(os.sep))
 
 
 def _module_file(value):
