@@ -66,17 +66,17 @@ def reached(namespace, own_file):
     """The tracked source files, other than own_file, that a module with globals
     `namespace` reaches through its globals, transitively (sorted)."""
     modules = {getattr(m, "__file__", None): m for m in list(sys.modules.values())}
-    seen, todo = {os.path.realpath(own_file)}, [namespace]
+    own = os.path.realpath(own_file)
+    seen, todo = {own}, [namespace]
     while todo:
         for value in list(todo.pop().values()):
             path = _module_file(value)
-            if not _tracked(path) or os.path.realpath(path) in seen:
+            if not _tracked(path) or (real := os.path.realpath(path)) in seen:
                 continue
-            seen.add(os.path.realpath(path))
+            seen.add(real)
             if path in modules:
                 todo.append(vars(modules[path]))
-    seen.discard(os.path.realpath(own_file))
-    return sorted(seen)
+    return sorted(seen - {own})
 
 
 def dependency_stamp(namespace, own_file):
