@@ -21,33 +21,29 @@ from tasks.robots import DRIVES, MOUNTS, PAPER_ROBOTS, ROBOTS, Robot, resolve  #
 __all__ = ["load", "compile_robot", "TaskConfig", "ROBOTS", "MOUNTS", "PAPER_ROBOTS", "DRIVES", "Robot",
            "resolve"]
 
-# drive -> (Task class, Physics classes by the actuator that marks them, substeps the
-# Environment runs per agent step, the task config's edit of the model spec)
+# drive -> (Task class, Physics classes by the actuator that marks them, the task
+# config's edit of the model spec)
 _DRIVES = {
-    "two_wheel": (two_wheel.TwoWheel, {"left_wheel": two_wheel.WheelPhysics,
-                                       "forward": two_wheel.Physics},
-                  two_wheel.move_substeps, navigation.edit_model),
-    "floating": (floating.Floating, {"thrust_x": floating.Physics}, floating.move_substeps,
-                 floating.edit_model),
+    "two_wheel": (two_wheel.TwoWheel, two_wheel.PHYSICS, navigation.edit_model),
+    "floating": (floating.Floating, {"thrust_x": floating.Physics}, floating.edit_model),
 }
 
 
 class Environment(control.Environment):
-    """dm_control's Environment whose step() runs the task's compiled step where its
-    drive has one (Navigation.compiled_step: the hooks' work in one compiled call,
-    tests/test_tasks.py checks it equal to the hooks step for step), and whose close()
+    """dm_control's Environment whose step() runs the task's compiled step
+    (Navigation.compiled_step: the hooks' work in one compiled call, tests/test_kernels.py
+    checks it equal to the hooks step for step), and whose close()
     frees the physics and its renderer's GL context (tasks.render), so none is left for
     the interpreter's exit to trip over."""
 
-    #: False runs dm_control's hooks one by one even where a compiled step exists.
+    #: False runs dm_control's hooks one by one (the same kernels, a call each).
     compiled = True
 
     @property
     def steps_compiled(self):
-        """True when step() runs the task's compiled step (tasks.kernels.step): a drive
-        with one, on a physics it can drive (not navigation.Physics.hooks_only)."""
-        return (self.compiled and not self._flat_observation and self._task.kind is not None
-                and not self._physics.hooks_only)
+        """True when step() runs the task's compiled step (tasks.kernels.steps.step): not
+        switched off, and the observation not flattened (dm_control's hooks do that)."""
+        return self.compiled and not self._flat_observation
 
     def step(self, action):
         if self._reset_next_step or not self.steps_compiled:
@@ -87,7 +83,7 @@ def compile_robot(entry, config=TaskConfig()):
         robot = mount.robot_spec(entry.mount)
     spec = models.compose(entry.model, timestep=entry.timestep, integrator=entry.integrator,
                           unit=entry.unit, robot=robot)
-    _DRIVES[entry.drive][3](spec, config)
+    _DRIVES[entry.drive][2](spec, config)
     try:
         return spec.compile(), spec
     except ValueError as e:
@@ -108,7 +104,7 @@ def load(robot, *, drive=None, seed=None, config=None, **fields):
     change (sensor_noise=0.0, bump="slide", ...)."""
     entry = robot if isinstance(robot, Robot) else resolve(robot, drive)
     config = dataclasses.replace(config or entry.task_config(), **fields)
-    task_cls, physics_classes, n_sub_steps, _ = _DRIVES[entry.drive]
+    task_cls, physics_classes, _ = _DRIVES[entry.drive]
     model, _ = compile_robot(entry, config)
     names = {mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, i)
              for i in range(model.nu)}
@@ -119,11 +115,12 @@ def load(robot, *, drive=None, seed=None, config=None, **fields):
         physics_cls = mount.physics_class(entry.mount)
         if entry.mount.action[0] == "gait":
             from tasks import gait
-            task_cls, n_sub_steps = gait.Gait, gait.move_substeps
+            task_cls = gait.Gait
     try:
         physics = physics_cls.from_model(wrapper.MjModel(model))
     except navigation.ContractError as e:
         raise navigation.ContractError(f"{_source(entry)}: {e}") from None
     task = task_cls(config, time_scale=entry.time_scale, random=np.random.RandomState(seed))
-    return Environment(physics, task, n_sub_steps=n_sub_steps(physics.timestep, entry.time_scale),
-                       time_limit=float("inf"))
+    # n_sub_steps 0: dm_control's step runs no substeps of its own; the drive's action
+    # (before_step) runs its phases' substeps.
+    return Environment(physics, task, n_sub_steps=0, time_limit=float("inf"))

@@ -4,15 +4,18 @@ Action (ah, av) in [-1, 1]^2: at the start of the step the velocity changes by
 0.2 (ah, av) units/step (each axis scaled by noise), then the robot coasts with its
 own velocity until it bumps into something. It starts at rest. The robot file's
 actuators ``thrust_x`` and ``thrust_y`` push along the world's x and y axes
-(motors on slide joints, or on a site with a world-fixed reference site).
+(motors on slide joints, or on a site with a world-fixed reference site). The step
+itself is tasks.kernels.floating.act (with the bump readings' coast, its bump_phase).
 """
-
 import mujoco
 import numpy as np
 
 import models
-from tasks import kernels, navigation
+from tasks import navigation
+from tasks.kernels import bindings
 from tasks.config import THRUSTS
+from tasks.kernels import floating as kernels
+from tasks.kernels.floating import FloatingDrive
 
 MAX_ACCELERATION = 0.2  # units per step, per step
 #: The velocity code's full scale (TaskConfig.velocity_code "code"), in units/step: the
@@ -41,17 +44,19 @@ def edit_model(spec, config):
 class Physics(navigation.Physics):
     """Adds the thrusters, as force motors along the world's x and y; and, for the bump
     readings "stop" and "bounce", the velocity change at a contact, applied after each
-    substep (tasks.kernels.bump_phase)."""
+    substep (tasks.kernels.floating.bump_phase)."""
+
+    Record = FloatingDrive
 
     def _reload_from_data(self, data):
         super()._reload_from_data(data)
         m = self.model
-        self._thrust_x = navigation.named_id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, "thrust_x")
-        self._thrust_y = navigation.named_id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, "thrust_y")
-        if self._thrust_x < 0 or self._thrust_y < 0:
+        thrust_x = navigation.named_id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, "thrust_x")
+        thrust_y = navigation.named_id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, "thrust_y")
+        if thrust_x < 0 or thrust_y < 0:
             raise navigation.ContractError("the floating drive needs actuators 'thrust_x' "
                                            "and 'thrust_y'")
-        if self._beams.stop - self._beams.start != 8:
+        if self.n_beams != 8:
             raise navigation.ContractError(
                 "the floating drive needs 8 rangefinders (E, NE, N, NW, W, SW, S, SE; eq 10)")
         self._mass = float(m.body_subtreemass[self._base])
@@ -62,26 +67,33 @@ class Physics(navigation.Physics):
             dof_y = m.jnt_dofadr[self.base_joints["y"]]
         #: The bumper geom's id (the bump readings' coast watches its contacts).
         self.hull = navigation.named_id(m, mujoco.mjtObj.mjOBJ_GEOM, "hull")
-        self._settings.update(act0=self._thrust_x, act1=self._thrust_y, hull=self.hull,
-                              dof_x=dof_x, dof_y=dof_y)
+        d = data.ptr
+        contact_f, contact_i, layout = bindings.contact_views(d)
+        self.parts.update(
+            thrust_x=thrust_x, thrust_y=thrust_y, hull=self.hull, dof_x=int(dof_x),
+            dof_y=int(dof_y), ncon=bindings.contact_count(d), contact_f=contact_f,
+            contact_i=contact_i, layout=layout, qpos0=np.empty(m.nq), qvel0=np.empty(m.nv),
+            normal=np.empty(2), velocity6=self._body_velocity, bump=kernels.BUMP_PHYSICS,
+            restitution=1.0)
 
     def set_bump(self, bump, restitution=1.0):
         """The bump reading applied after each substep: "stop" or "bounce" (with the
         share of the speed into the wall that it reflects); anything else leaves a wall
         to the contact's physics ("grip", "slide")."""
-        self.set_drive(bump={"stop": kernels.BUMP_STOP,
-                             "bounce": kernels.BUMP_BOUNCE}.get(bump, kernels.BUMP_PHYSICS),
-                       restitution=restitution)
+        self.parts.update(bump={"stop": kernels.BUMP_STOP,
+                                "bounce": kernels.BUMP_BOUNCE}.get(bump, kernels.BUMP_PHYSICS),
+                          restitution=float(restitution))
 
     def step(self, nstep=1):
-        """Substeps; with "stop" or "bounce", a substep that brings the bumper into a wall
-        while moving towards it is undone (no contact forces act, nothing sinks in), and
-        the velocity becomes 0 ("stop") or its mirror image off the wall ("bounce", the
-        part into the wall scaled by the restitution); with the others, the substeps as
-        navigation.Physics.step runs them."""
-        status = kernels.bump_phase(self.drive_record(), nstep)
+        """Substeps with the bump reading (kernels.bump_phase): with "stop" or "bounce", a
+        substep that brings the bumper into a wall while moving towards it is undone and
+        the velocity becomes 0 ("stop") or its mirror image off the wall ("bounce"); with
+        the others, the substeps as navigation.Physics.step runs them."""
+        if nstep <= 0 or self.record is None:
+            return super().step(nstep)
+        status = kernels.bump_phase(self.record, nstep)
         self.substeps += nstep
-        if status != kernels.OK:
+        if status != bindings.OK:
             self.raise_for(status)
 
     def set_robot_pose(self, x, y, heading=0.0):
@@ -93,78 +105,35 @@ class Physics(navigation.Physics):
         """The force per unit/step of velocity change in one substep."""
         return self.unit / self.step_seconds * self._mass / self.timestep
 
-    def thrust(self, dvx, dvy):
-        """Sets the thrust that changes the velocity by (dvx, dvy) units/step in one substep."""
-        scale = self.thrust_scale()
-        ctrl = self._ctrl
-        ctrl[self._thrust_x] = dvx * scale
-        ctrl[self._thrust_y] = dvy * scale
-
 
 class Floating(navigation.Navigation):
     action_dim = 2
-    kind = kernels.FLOATING
     observation_keys = ("range", "velocity")
 
     def __init__(self, config=navigation.TaskConfig(), **kw):
         super().__init__(config, **kw)
         self.velocity_noise = float(config.velocity_noise)
 
-    def initialize_episode(self, physics):
-        physics.step_seconds = substeps(physics.timestep, self.time_scale) * physics.timestep
-        physics.set_bump(self.config.bump, self.config.restitution)
+    def drive_settings(self, physics):
         n = substeps(physics.timestep, self.time_scale)
-        self.start_drive(physics, **self.kernel_settings(1, n - 1, (MAX_ACCELERATION, 0.0)),
-                         thrust=THRUSTS.index(self.config.thrust),
-                         velocity=physics.step_seconds / physics.unit,
-                         thrust_force=physics.thrust_scale(),
-                         velocity_code=self.config.velocity_code == "code",
-                         velocity_full=VELOCITY_FULL_SCALE)
-        super().initialize_episode(physics)
-
-    def get_observation(self, physics):
-        obs = super().get_observation(physics)
-        obs["velocity"] = self.sense_velocity(physics)
-        return obs
+        physics.step_seconds = n * physics.timestep
+        physics.set_bump(self.config.bump, self.config.restitution)
+        return dict(n_thrust=1, n_coast=n - 1, max_acceleration=MAX_ACCELERATION,
+                    thrust=THRUSTS.index(self.config.thrust),
+                    velocity=physics.step_seconds / physics.unit,
+                    thrust_force=physics.thrust_scale(),
+                    velocity_code=int(self.config.velocity_code == "code"),
+                    velocity_full=VELOCITY_FULL_SCALE)
 
     def sense_velocity(self, physics):
         """The velocity reading (units/step): with velocity_noise, plus Gaussian noise of
         that sd; with velocity_code "code", through the 0-255 code over
-        +-VELOCITY_FULL_SCALE and back (Section 3.2's encoding applied to a velocity)."""
-        v = physics.robot_velocity()
-        config = self.config
-        if config.velocity_noise > 0:
-            v = v + self.random.normal(0.0, config.velocity_noise, size=2)
-        if config.velocity_code == "code":
-            half = navigation.SENSOR_LEVELS / 2
-            code = np.rint(np.clip(v / VELOCITY_FULL_SCALE, -1.0, 1.0) * half + half)
-            v = (code - half) / half * VELOCITY_FULL_SCALE
-        return v
-
-    def demand(self, a):
-        """The velocity change (units/step) for a demand a in [-1, 1], by the thrust
-        reading: "scaled" 0.2 a, "demand" a, "clipped" a clipped to [-0.2, 0.2]."""
-        thrust = self.config.thrust
-        if thrust == "scaled":
-            return MAX_ACCELERATION * a
-        if thrust == "demand":
-            return a
-        return min(max(a, -MAX_ACCELERATION), MAX_ACCELERATION)
-
-    def before_step(self, action, physics):
-        ah, av = self.checked_action(action)
-        nh, nv = self.noise_factors()
-        physics.thrust(self.demand(ah) * nh, self.demand(av) * nv)
-        physics.step(1)
-        physics.thrust(0.0, 0.0)
-        # The environment then coasts for the other substeps.
+        +-VELOCITY_FULL_SCALE and back (tasks.kernels.floating.velocity_reading)."""
+        noise = (self.random.normal(0.0, self.velocity_noise, size=2)
+                 if self.velocity_noise > 0 else np.zeros(0))
+        return kernels.velocity_reading(physics.record, physics.robot_velocity(), noise)
 
 
 def substeps(timestep, time_scale=1.0):
     """Substeps per agent step."""
     return max(2, navigation.substeps(STEP_SECONDS * time_scale, timestep))
-
-
-def move_substeps(timestep, time_scale=1.0):
-    """Substeps the environment runs per agent step: the coast after the thrust."""
-    return substeps(timestep, time_scale) - 1

@@ -35,10 +35,10 @@ import math
 import mujoco
 import numpy as np
 
-from tasks import gait_kernels, kernels, navigation, two_wheel
+from tasks import navigation
 
-MAX_TURN = two_wheel.MAX_TURN
-MAX_MOVE = two_wheel.MAX_MOVE
+from tasks.kernels.gait import GaitDrive
+from tasks.two_wheel import family_settings
 
 #: The gait's parameters (a mount's [action.gait] may set any of them) and defaults.
 PARAMETERS = {
@@ -67,6 +67,7 @@ LEGS = 4
 class Physics(navigation.Physics):
     """A legged base on a free joint, its hips and ankles under the gait's PD loops."""
 
+    Record = GaitDrive
     gait = dict(PARAMETERS)
 
     def _reload_from_data(self, data):
@@ -93,6 +94,22 @@ class Physics(navigation.Physics):
         self._ctrl_lo[unlimited], self._ctrl_hi[unlimited] = -np.inf, np.inf
         self._rest = mjm.qpos0[self._q].copy()
         self._shares(mjm, joints)
+        g = self.gait
+        k = int(g["control_substeps"])
+
+        def ticks(seconds):
+            return max(1, round(seconds / (k * self.timestep)))
+
+        self.parts.update(
+            acts=self._acts, q=self._q, dq=self._dq, rest=self._rest, ctrl_lo=self._ctrl_lo,
+            ctrl_hi=self._ctrl_hi, forward_share=self._forward_share,
+            turn_share=self._turn_share, lift_sign=self._lift_sign, offset=self._offset,
+            kp=float(g["kp"]), kd=float(g["kd"]), tick=k * self.timestep, control_substeps=k,
+            **{name: float(g[name]) for name in (
+                "amplitude", "lift", "frequency", "heading_gain", "turn_tolerance",
+                "slow_down", "coast", "max_turn_seconds", "max_move_seconds",
+                "feedback_seconds")},
+            n_feedback=ticks(g["feedback_seconds"]), n_settle=ticks(g["settle_seconds"]))
 
     def _shares(self, mjm, joints):
         """Each hip's forward and turning shares and each ankle's lift sign, from the
@@ -136,48 +153,9 @@ class Physics(navigation.Physics):
         front = np.array([np.sign(moved(self._q[leg], 0.0, leg)[0]) for leg in range(LEGS)])
         self._offset = np.where(side * front > 0, 0.0, 0.5)
 
-    # -- the controller ----------------------------------------------------------
-    def begin_gait(self):
-        g = self.gait
-        self._phase = np.zeros(1)
-        self._target = np.zeros(2 * LEGS)
-        self._params = np.zeros(gait_kernels.N_PARAMS)
-        p = self._params
-        p[gait_kernels.P_KP], p[gait_kernels.P_KD] = g["kp"], g["kd"]
-        p[gait_kernels.P_TICK] = int(g["control_substeps"]) * self.timestep
-        p[gait_kernels.P_MIN_COS_TILT] = self._min_cos_tilt
-
-    def control(self, forward, turn, seconds):
-        """Walks with the CPG for `seconds` at the given commands (forward in [0, 1], turn
-        in [-1, 1]: counter-clockwise positive), updating the PD every control_substeps
-        (tasks.gait_kernels.walk)."""
-        g = self.gait
-        share = forward * self._forward_share + turn * self._turn_share
-        share /= max(1.0, float(np.max(np.abs(share))))
-        self._walk(seconds, share, g["amplitude"], g["lift"], g["frequency"])
-
-    def hold(self, seconds):
-        """The legs back to rest, for `seconds` (the phase held)."""
-        self._walk(seconds, np.zeros(LEGS), 0.0, 0.0, 0.0)
-
-    def _walk(self, seconds, share, amplitude, lift, frequency):
-        k = int(self.gait["control_substeps"])
-        n = max(1, round(seconds / (k * self.timestep)))
-        p = self._params
-        p[gait_kernels.P_AMPLITUDE], p[gait_kernels.P_LIFT] = amplitude, lift
-        p[gait_kernels.P_FREQUENCY] = frequency
-        status = gait_kernels.walk(self._m, self._d, n, k, self._bad_qacc, self._xmat,
-                                   self._qpos, self._qvel, self._ctrl,
-                                   self._q, self._dq, self._acts, self._rest, share,
-                                   self._lift_sign, self._offset, self._ctrl_lo,
-                                   self._ctrl_hi, p, self._phase, self._target)
-        self.substeps += n * k
-        if status != kernels.OK:
-            self.raise_for(status)
-
-    def heading(self):
-        r = self._xmat
-        return math.atan2(r[3], r[0])
+    def episode_settings(self):
+        """The CPG's state at an episode's start: phase 0, targets 0; scratch."""
+        return dict(phase=np.zeros(1), target=np.zeros(2 * LEGS), share=np.zeros(LEGS))
 
 
 def check_config(config):
@@ -193,65 +171,14 @@ class Gait(navigation.Navigation):
 
     action_dim = 1
 
-    def initialize_episode(self, physics):
+    def drive_settings(self, physics):
         check_config(self.config)
         # an agent step's nominal seconds (the velocity read-out's unit): the longest
         # turn and move
         g = physics.gait
         physics.step_seconds = g["max_turn_seconds"] + g["max_move_seconds"]
-        super().initialize_episode(physics)
-        physics.begin_gait()
-
-    def _turn(self, physics, angle):
-        """Turns by `angle` rad (counter-clockwise) with heading feedback."""
-        g = physics.gait
-        target = physics.heading() + angle
-        chunk = g["feedback_seconds"]
-        t = 0.0
-        while t < g["max_turn_seconds"]:
-            err = math.remainder(target - physics.heading(), 2 * math.pi)
-            if abs(err) < g["turn_tolerance"]:
-                break
-            physics.control(0.0, max(-1.0, min(1.0, g["heading_gain"] * err)), chunk)
-            t += chunk
-        physics.hold(g["settle_seconds"])
-
-    def before_step(self, action, physics):
-        (a,) = self.checked_action(action)
-        noise_turn, noise_move = self.noise_factors()
-        turn = -a * MAX_TURN * noise_turn  # counter-clockwise positive
-        move = MAX_MOVE * (1.0 - abs(a)) * noise_move
-        sign = 1.0 if turn > 0 else -1.0
-        g = physics.gait
-        if abs(turn) > g["turn_tolerance"]:
-            self._turn(physics, turn)
-        x0, y0, h0 = physics.robot_pose()
-        c, s = math.cos(h0), math.sin(h0)
-        chunk = g["feedback_seconds"]
-        t, done = 0.0, 0.0
-        while move - done > g["coast"] and t < g["max_move_seconds"]:
-            err = math.remainder(h0 - physics.heading(), 2 * math.pi)
-            forward = min(1.0, max(0.3, (move - done) / g["slow_down"]))
-            physics.control(forward, max(-1.0, min(1.0, g["heading_gain"] * err)), chunk)
-            t += chunk
-            x, y, _ = physics.robot_pose()
-            done = (x - x0) * c + (y - y0) * s
-        if move > g["coast"]:
-            physics.hold(g["settle_seconds"])
-        x, y, _ = physics.robot_pose()
-        rest = move - ((x - x0) * c + (y - y0) * s)
-        if rest > two_wheel.BLOCKED_TOLERANCE:
-            sign = two_wheel.leftover_sign(self.config, physics, sign)
-            self._turn(physics, sign * rest * MAX_TURN / MAX_MOVE)
-
-    def after_step(self, physics):
-        super().after_step(physics)
-
-
-def move_substeps(timestep, time_scale=1.0):
-    """Substeps the environment runs after before_step: one (the gait's steps are all in
-    before_step)."""
-    return 1
+        return dict(n_turn=0, n_move=0, **family_settings(self.config, physics),
+                    **physics.episode_settings())
 
 
 def physics_class(mount):

@@ -32,7 +32,7 @@ import gymnasium
 import numpy as np
 from gymnasium import spaces
 
-from tasks.kernels import stage_timers_off
+from tasks.kernels.bindings import stage_timers_off
 from tasks.navigation import SENSOR_LEVELS
 from tasks.robots import ROBOTS
 

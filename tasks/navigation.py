@@ -1,9 +1,10 @@
 """The navigation task shared by every robot (Unemi 2000, Sections 3.1-3.2).
 
-`Physics` holds the named read-outs in paper units; `Navigation` owns the reward
-at the goal, the start jitter, the rangefinder encoding and noise, termination
-and the action noise. Each drive's module (two_wheel, floating) adds only its
-action mapping.
+`Physics` holds the named read-outs in paper units and builds the drive's record;
+`Navigation` owns the reward at the goal, the start jitter, the rangefinder encoding
+and noise, termination and the action noise's draws. Each drive's module (two_wheel,
+floating, gait) adds its physics' parts and its episode's settings; the drive's step
+itself is compiled (tasks.kernels), and the dm_env hooks here call it.
 
 Read-outs come from the robot's base body (``robot/base``): position and heading
 from its frame, planar velocity from its body velocity, so slide joints and free
@@ -19,8 +20,9 @@ from dm_control.rl import control
 from dm_env import specs
 
 from models import NAMES_TEXT, PREFIX, UNIT, UNIT_NUMERIC, contract_names, room_layout, unit_of
-from tasks import kernels
 from tasks.config import TaskConfig
+from tasks.kernels import bindings, body, sensing, steps
+from tasks.kernels.stream import TaskStream
 
 # Section 3.1: the start pose is the room's "start" site (5 units from the left edge,
 # 25 below the top edge, heading right). The jitter, the sensors' range and noise and
@@ -39,10 +41,7 @@ class ContractError(ValueError):
     """A robot file that lacks a part the naming contract asks for."""
 
 
-# The per-step sensor arithmetic runs as small compiled loops (tasks.kernels): on 7-8
-# sensor values, numpy's per-call overhead cost more than the sensing itself. Same
-# operations in the same order, so the same bits (tested).
-
+#: An empty draw: no noise (the kernels take an empty array for "off").
 _NO_NOISE = np.zeros(0)
 
 
@@ -53,8 +52,8 @@ def encode_range(distance, noise=_NO_NOISE, sensor_range=TaskConfig.sensor_range
     touching beam (d <= 0) reads 255. With noise (one value per reading), the noisy
     code clipped to [0, 255].
     """
-    return kernels.encode(np.asarray(distance, dtype=np.float64), noise, float(SENSOR_LEVELS),
-                   -SENSOR_LEVELS / sensor_range)
+    return sensing.encode(np.asarray(distance, dtype=np.float64), noise, float(SENSOR_LEVELS),
+                          -SENSOR_LEVELS / sensor_range)
 
 
 #: The contract's word on a robot without its bumper.
@@ -148,56 +147,36 @@ class Physics(dm_mujoco.Physics):
         self.goal_box = (np.array(goal[::2]), np.array(goal[1::2]))
         #: Seconds of simulated time per agent step; set by the task.
         self.step_seconds = 1.0
-        # What the compiled kernels (tasks.kernels.Drive) work on: the structs' addresses,
-        # views of the ints they touch, MuJoCo's arrays, scratch; and the robot's part of
-        # the drive's settings (each drive's Physics and task add theirs).
-        self._m, self._d = mjm._address, data.ptr._address
-        self._flags = kernels.disable_flags(mjm)
-        self._bad_qacc = kernels.warning_count(data.ptr, mujoco.mjtWarning.mjWARN_BADQACC)
-        contact_f, contact_i, layout = kernels.contact_views(data.ptr)
-        self._handles = dict(
-            m=self._m, d=self._d, flags=self._flags, bad_qacc=self._bad_qacc,
+        # The body's part of the drive's record (tasks.kernels.body.BODY_FIELDS): the
+        # structs' addresses (the bindings' _address: no public way to them), views of the
+        # ints the kernels touch, MuJoCo's arrays; the drive's Physics adds its own parts.
+        (x0, y0), (x1, y1) = self.goal_box
+        #: The body's values of the drive's record, by name.
+        self.body = dict(
+            m=mjm._address, d=data.ptr._address, flags=bindings.disable_flags(mjm),
+            bad_qacc=bindings.warning_count(data.ptr, mujoco.mjtWarning.mjWARN_BADQACC),
             ctrl=self._ctrl, qpos=self._qpos, qvel=self._qvel, act=self._act,
             sensordata=self._sensordata, xpos=self._xpos, xmat=self._xmat,
-            velocity6=self._body_velocity, ncon=kernels.contact_count(data.ptr),
-            contact_f=contact_f, contact_i=contact_i, layout=layout, qpos0=np.empty(mjm.nq),
-            qvel0=np.empty(mjm.nv), act_saved=np.empty(mjm.na), normal=np.empty(2),
-            plan=np.zeros(6))
-        (x0, y0), (x1, y1) = self.goal_box
-        self._settings = dict(
-            qyaw=-1 if self._qyaw is None else self._qyaw, free=self._free is not None,
-            base=self._base, beam0=self._beams.start, beam1=self._beams.stop, unit=unit,
-            timestep=self.timestep, metres_to_units=1.0 / unit, radius=self.robot_radius,
-            min_cos_tilt=self._min_cos_tilt, x0=x0, x1=x1, y0=y0, y1=y1)
+            qyaw=-1 if self._qyaw is None else self._qyaw, free=int(self._free is not None),
+            base=int(self._base), beam0=self._beams.start, beam1=self._beams.stop, unit=unit,
+            metres_to_units=1.0 / unit, radius=float(self.robot_radius),
+            timestep=self.timestep, min_cos_tilt=float(self._min_cos_tilt), x0=float(x0),
+            x1=float(x1), y0=float(y0), y1=float(y1))
+        #: The drive's own parts of its record (each drive's Physics fills them), by name.
+        self.parts = {}
+        #: The drive's record (Record), built at each episode's start (set_drive).
         self.record = None
         #: Rangefinders (the sensor noise draws one normal for each).
         self.n_beams = len(adr)
 
-    #: True where the drive's compiled step cannot run this physics (its phases are its
-    #: own: tasks.two_wheel.MotorWheelPhysics): the Environment runs the task's hooks,
-    #: and the fused loop refuses it (tasks.Environment.steps_compiled).
-    hooks_only = False
-
-    def saved_state(self):
-        """What restore_state returns the physics to: qpos, qvel, act (copies)."""
-        data = self._mj[1]
-        return data.qpos.copy(), data.qvel.copy(), data.act.copy()
-
-    def restore_state(self, saved):
-        """Back to a saved_state (the caller runs mj_forward)."""
-        data = self._mj[1]
-        data.qpos[:], data.qvel[:], data.act[:] = saved
+    #: The drive's record class (an ebrl.records.Record of BODY_FIELDS and the drive's).
+    Record = None
 
     def set_drive(self, **settings):
-        """Sets some of the drive's settings (tasks.kernels.SETTINGS) and builds the
-        kernels' record of them (`record`, a tasks.kernels.Drive)."""
-        self._settings.update(settings)
-        self.record = kernels.drive_record(self._handles, self._settings)
+        """The drive's record (`record`, a `Record`) of the body, the physics' parts and
+        the episode's settings (the task's), by name."""
+        self.record = self.Record.build(**{**self.body, **self.parts, **settings})
         return self.record
-
-    def drive_record(self):
-        """The kernels' record (tasks.kernels.Drive) at the current settings."""
-        return self.record if self.record is not None else self.set_drive()
 
     def _find_base_joints(self, m):
         """The base's joints: one free joint, or slide x and slide y (and hinge yaw)."""
@@ -234,13 +213,8 @@ class Physics(dm_mujoco.Physics):
         A base turning on a hinge about z reports the hinge's angle, which is the frame's
         heading exactly (the frame's rotation matrix, made through a quaternion, rounds
         it in the last bits); any other base, its frame's x axis in the plane."""
-        p = self._xpos
-        if self._qyaw is not None:
-            heading = float(self._qpos[self._qyaw])
-        else:
-            r = self._xmat
-            heading = math.atan2(r[3], r[0])
-        return float(p[0]) / self.unit, float(p[1]) / self.unit, heading
+        return sensing.pose(self._xpos, self._xmat, self._qpos,
+                            -1 if self._qyaw is None else self._qyaw, self.unit)
 
     def tilt(self):
         """Angle in radians between the base's z axis and the vertical."""
@@ -248,18 +222,15 @@ class Physics(dm_mujoco.Physics):
 
     def robot_velocity(self):
         """(vx, vy) of the base body's frame in paper units per agent step."""
-        model, data = self._mj
-        v = self._body_velocity
-        mujoco.mj_objectVelocity(model, data, mujoco.mjtObj.mjOBJ_BODY, self._base, v, 0)
-        scale = self.step_seconds / self.unit
-        return np.array([v[3] * scale, v[4] * scale])
+        return sensing.velocity(self.body["m"], self.body["d"], self._base,
+                                self.step_seconds / self.unit, self._body_velocity)
 
     def ranges(self):
         """Distance from the body surface along each beam, in units; inf where nothing is
         hit. Runs the sensor stage once, at the current state."""
-        return kernels.ranges(self._m, self._d, self._flags, self._sensordata,
-                              self._beams.start, self._beams.stop, 1.0 / self.unit,
-                              self.robot_radius)
+        b = self.body
+        return sensing.ranges(b["m"], b["d"], b["flags"], self._sensordata, self._beams.start,
+                              self._beams.stop, 1.0 / self.unit, self.robot_radius)
 
     def render(self, height=240, width=320, camera_id=-1, scene_option=None,
                scene_callback=None):
@@ -272,25 +243,29 @@ class Physics(dm_mujoco.Physics):
     def in_goal(self):
         """True when the robot's centre is inside the goal square."""
         x, y, _ = self.robot_pose()
-        lo, hi = self.goal_box
-        return bool(lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1])
+        b = self.body
+        return body.in_box(x, y, b["x0"], b["x1"], b["y0"], b["y1"])
 
     def step(self, nstep=1):
         """dm_control's legacy step (mj_step2, mj_step(n-1), mj_step1), so contacts and
-        kinematics describe the new state, without its per-call Python overhead.
+        kinematics describe the new state, without its per-call Python overhead; none
+        for nstep 0 (the Environment's, whose drive's step ran its own substeps).
         Raises PhysicsError when MuJoCo flags an unstable state or a 3D robot tips over."""
-        status = kernels.run(self._m, self._d, nstep, self._bad_qacc, self._xmat,
-                             self._free is not None, self._min_cos_tilt)
+        if nstep <= 0:
+            return
+        b = self.body
+        status = bindings.run(b["m"], b["d"], nstep, b["bad_qacc"], self._xmat,
+                              self._free is not None, self._min_cos_tilt)
         self.substeps += nstep
-        if status != kernels.OK:
+        if status != bindings.OK:
             self.raise_for(status)
 
     def raise_for(self, status):
-        """The PhysicsError of a kernel's status (tasks.kernels: UNSTABLE, TIPPED)."""
+        """The PhysicsError of a kernel's status (tasks.kernels.bindings: UNSTABLE, TIPPED)."""
         t = self._mj[1].time
-        if status == kernels.NOT_FINITE:
+        if status == bindings.NOT_FINITE:
             raise ValueError("action must be finite")
-        if status == kernels.UNSTABLE:
+        if status == bindings.UNSTABLE:
             raise control.PhysicsError(f"unstable simulation at t={t:.3f} s")
         raise control.PhysicsError(f"the robot tipped over at t={t:.3f} s "
                                    f"(tilt {math.degrees(self.tilt()):.0f} degrees)")
@@ -318,58 +293,16 @@ class Physics(dm_mujoco.Physics):
         self.forward()
 
 
-class TaskStream:
-    """The task's RandomState as the compiled draws read it (tasks.kernels.Stream, in
-    `record`): `fill` saves the RandomState's state and draws a buffer of its next
-    doubles; `settle` winds it to just past the doubles the draws used, with
-    legacy_gauss's cached value as they left it. While a buffer is out, the RandomState
-    itself is ahead of what was used: `settled()` is the way to it."""
-
-    def __init__(self, random):
-        self._random = random
-        self.record = kernels.Stream(np.zeros(0), 0, 0, 0.0)
-        self._saved = None
-
-    def fill(self):
-        """A fresh buffer of the stream's next doubles (after settling the last)."""
-        self.settle()
-        self._saved = state = self._random.get_state()
-        kernels.stream_refill(self.record, self._random.random_sample(kernels.BUFFER),
-                              int(state[3]), float(state[4]))
-
-    def settle(self):
-        """The RandomState wound to just past the doubles used; the buffer is dropped."""
-        if self._saved is None:
-            return
-        cursor, has_gauss, value = kernels.stream_state(self.record)
-        self._random.set_state(self._saved)
-        if cursor:
-            self._random.random_sample(int(cursor))
-        state = self._random.get_state()
-        self._random.set_state(state[:3] + (int(has_gauss), float(value)))
-        self._saved = None
-
-    def ready(self):
-        """A buffer out (a fresh one unless one is)."""
-        if self._saved is None:
-            self.fill()
-
-    def settled(self):
-        """The RandomState, settled."""
-        self.settle()
-        return self._random
-
-    def draws(self, u, z, sensor_noise, vz, velocity_noise):
-        """One step's draws into u, z, vz (tasks.kernels.task_draws), from a new buffer
-        where the current one might run out."""
-        if self._saved is None or not kernels.task_draws(self.record, u, z, sensor_noise, vz,
-                                                         velocity_noise):
-            self.fill()
-            kernels.task_draws(self.record, u, z, sensor_noise, vz, velocity_noise)
-
-
 class Navigation(control.Task):
-    """Reach the goal square from the jittered start; the robot class maps actions.
+    """Reach the goal square from the jittered start; the drive's compiled step acts.
+
+    The dm_env hooks: before_step checks the action, draws the action noise and runs
+    the drive's action (tasks.kernels.steps.act); after_step tests the goal;
+    get_observation draws the sensor noise and reads the range codes (and, floating,
+    the velocity). compiled_step does all of it in one compiled call
+    (tasks.kernels.steps.step), drawing from the buffered stream: the same draws, the
+    same kernels, the same bits. Each drive's task sets its episode's settings in
+    initialize_episode (start_drive).
 
     A dm_control task (control.Task, as dm_control.suite.base.Task is, whose only part used
     here is its RandomState: importing dm_control.suite imports every suite domain and
@@ -377,8 +310,6 @@ class Navigation(control.Task):
 
     #: Action dimension, set by each robot.
     action_dim = 1
-    #: The drive's kernels (tasks.kernels.TWO_WHEEL, FLOATING); None: the hooks only.
-    kind = None
     #: The observation's modalities in order, each a key of get_observation's.
     observation_keys = ("range",)
 
@@ -408,12 +339,11 @@ class Navigation(control.Task):
     velocity_noise = 0.0
 
     # -- episode -------------------------------------------------------------
-    def kernel_settings(self, n_first, n_rest, gains=(0.0, 0.0)):
-        """The task's part of the kernels' settings (tasks.kernels.SETTINGS): the substeps
-        of the step's two phases, Section 3.2's code and noise, the drive's constants."""
-        return dict(n_first=n_first, n_rest=n_rest, levels=SENSOR_LEVELS,
-                    per_unit=-SENSOR_LEVELS / self.config.sensor_range,
-                    action_noise=self.action_noise, gain0=gains[0], gain1=gains[1])
+    def body_settings(self):
+        """The task's part of every drive's record (tasks.kernels.body.BODY_FIELDS):
+        Section 3.2's code and Section 3.3's action noise."""
+        return dict(levels=float(SENSOR_LEVELS), per_unit=-SENSOR_LEVELS / self.config.sensor_range,
+                    action_noise=self.action_noise)
 
     def draw_buffers(self, n_beams):
         """Arrays for one step's draws (u, z, vz), each empty where its noise is off."""
@@ -423,7 +353,7 @@ class Navigation(control.Task):
 
     def draws(self, physics):
         """One step's random draws, in the order the hooks make them: the action noise's
-        two uniforms (noise_factors), the sensor noise's normals (sense), the floating
+        two uniforms (before_step), the sensor noise's normals (sense), the floating
         velocity noise's normals (sense_velocity)."""
         u, z, vz = self._draws
         self.stream.draws(u, z, self.sensor_noise, vz, self.velocity_noise)
@@ -437,43 +367,46 @@ class Navigation(control.Task):
             if not (a.ndim == 0 and self.action_dim == 1):
                 self.checked_action(action)
             a = a.reshape(1)
-        if not kernels.clip_unit(a):
+        if not body.clip_unit(a):
             self.checked_action(action)
         return a
 
     def compiled_step(self, action, physics):
         """The work of env.step's hooks (before_step, the substeps, after_step,
         get_reward, get_observation, get_termination) in one compiled call
-        (tasks.kernels.step): returns (reward, observation, termination), or None where
-        the drive has no such kernel (then the hooks run)."""
-        if self.kind is None:
-            return None
+        (tasks.kernels.steps.step): returns (reward, observation, termination)."""
         a = self.compiled_action(action)
         u, z, vz = self.draws(physics)
         codes, velocity = self._sensed
-        status, n, goal = kernels.step(physics.record, a, u, z, vz, codes, velocity)
+        status, n, goal = steps.step(physics.record, a, u, z, vz, codes, velocity)
         self.finish(n, goal, physics, status)
         observation = collections.OrderedDict()
         for key in self.observation_keys:
             observation[key] = (codes if key == "range" else velocity).copy()
         return (1.0 if goal else 0.0), observation, (0.0 if goal else None)
 
-    def finish(self, substeps, goal, physics, status=kernels.OK):
+    def finish(self, substeps, goal, physics, status=bindings.OK):
         """The end of compiled steps (this task's or a compiled loop's): the substeps
         counted, MuJoCo's refusal raised, the goal kept for the reward."""
         physics.substeps += substeps
-        if status != kernels.OK:
+        if status != bindings.OK:
             physics.raise_for(status)
         self._at_goal = goal
 
     def start_drive(self, physics, **settings):
-        """The episode's drive settings (kernel_settings' and the drive's) into the
-        physics' kernel record, and the arrays of the step's draws and sensor values."""
-        physics.set_drive(kind=self.kind, **settings)
+        """The episode's drive settings (body_settings' and the drive's) into the
+        physics' record, and the arrays of the step's draws and sensor values."""
+        physics.set_drive(**self.body_settings(), **settings)
         self._draws = self.draw_buffers(physics.n_beams)
         self._sensed = (np.zeros(physics.n_beams), np.zeros(2))
 
+    def drive_settings(self, physics):
+        """The drive's settings for an episode (its phases' substeps, its readings; the
+        drive's task gives them, setting physics.step_seconds)."""
+        raise NotImplementedError
+
     def initialize_episode(self, physics):
+        self.start_drive(physics, **self.drive_settings(physics))
         x, y, heading = physics.start
         if self.config.start_jitter:
             jx, jy = self.random.uniform(-self._jitter_xy, self._jitter_xy, size=2)
@@ -481,22 +414,36 @@ class Navigation(control.Task):
             x, y, heading = x + jx, y + jy, heading + jh
         physics.set_robot_pose(x, y, heading)
 
+    def before_step(self, action, physics):
+        """The action checked (checked_action's errors), the action noise's two uniforms
+        drawn, then the drive's action (tasks.kernels.steps.act): its phases' substeps."""
+        a = np.array(self.checked_action(action))
+        u = self.random.random_sample(2) if self.action_noise > 0 else _NO_NOISE
+        status, n = steps.act(physics.record, a, u)
+        self.finish(n, False, physics, status)
+
+    def after_step(self, physics):
+        self._at_goal = body.goal_reached(physics.record)
+
     def get_observation(self, physics):
+        if physics.record is None:
+            # dm_control's observation_spec reads an observation before any episode (its
+            # noise draws included): the drive's record is made for it.
+            self.start_drive(physics, **self.drive_settings(physics))
         obs = collections.OrderedDict()
-        obs["range"] = self.sense(physics)
+        for key in self.observation_keys:
+            obs[key] = self.sense(physics) if key == "range" else self.sense_velocity(physics)
         return obs
 
     def sense(self, physics):
         """Range codes (Section 3.2) plus Gaussian noise, clipped to [0, 255]."""
-        distance = physics.ranges()
-        if self.sensor_noise > 0:
-            return encode_range(distance, self.random.normal(0.0, self.sensor_noise,
-                                                             size=distance.shape),
-                                self.config.sensor_range)
-        return encode_range(distance, sensor_range=self.config.sensor_range)
+        noise = (self.random.normal(0.0, self.sensor_noise, size=physics.n_beams)
+                 if self.sensor_noise > 0 else _NO_NOISE)
+        return body.sense(physics.record, noise)
 
-    def after_step(self, physics):
-        self._at_goal = physics.in_goal()
+    def sense_velocity(self, physics):
+        """The velocity reading, for a drive whose observation has one."""
+        raise NotImplementedError(f"{type(self).__name__} senses no velocity")
 
     def get_reward(self, physics):
         return 1.0 if self._at_goal else 0.0
@@ -520,13 +467,3 @@ class Navigation(control.Task):
         if not all(map(math.isfinite, values)):
             raise ValueError(f"action must be finite, got {values}")
         return [min(max(v, -1.0), 1.0) for v in values]
-
-    def noise_factors(self):
-        """Section 3.3: one factor per action part, drawn uniformly from [1 - noise, 1]."""
-        if self.action_noise <= 0:
-            return [1.0, 1.0]
-        # RandomState.uniform(low, 1) computes low + (1 - low) u; written out, it skips
-        # uniform's argument handling and gives the same numbers.
-        low = 1.0 - self.action_noise
-        u, v = self.random.random_sample(2).tolist()
-        return [low + (1.0 - low) * u, low + (1.0 - low) * v]

@@ -35,9 +35,12 @@ def _state(env, agent):
             (task_state[1].tobytes(),) + tuple(task_state[2:]))
 
 
-@pytest.mark.parametrize("robot,steps", [("two_wheel", 9000), ("floating", 6000),
-                                         ("diff_drive", 1200), ("hovercraft", 1500)])
-@pytest.mark.parametrize("condition", ["avoidance", "random"])
+@pytest.mark.parametrize("robot,steps,condition", [
+    (robot, steps, condition) for robot, steps in (("two_wheel", 9000), ("floating", 6000),
+                                                   ("diff_drive", 1200), ("hovercraft", 1500))
+    for condition in ("avoidance", "random")] + [
+    # the mounts' own drives: the car's motors, the Ant's gait, the point mass's thrusters
+    ("car", 400, "avoidance"), ("ant", 30, "random"), ("point_mass", 600, "avoidance")])
 def test_a_stretch_is_the_step_by_step_loop(robot, steps, condition):
     """protocol.Trials step by step (Agent.act, Environment.step, Agent.learn) against
     the compiled stretches over the same functions, in stretches of at most 700 steps
@@ -50,7 +53,8 @@ def test_a_stretch_is_the_step_by_step_loop(robot, steps, condition):
     assert two.fused and not one.fused
     for t in (one, two):
         t.run(steps // 2).run(steps - steps // 2)
-    assert len(one.trial_ends) >= 1 or robot in ("diff_drive", "hovercraft")
+    assert len(one.trial_ends) >= 1 or robot in ("diff_drive", "hovercraft", "car", "ant",
+                                                 "point_mass")
     assert one.trial_ends == two.trial_ends
     assert one.trace.tobytes() == two.trace.tobytes()
     assert _state(env1, agent1) == _state(env2, agent2)
@@ -74,8 +78,8 @@ def test_runs_are_the_same_fused_or_not_and_reach_the_goal():
 def test_the_task_stream_is_numpys_legacy_stream():
     """The buffered doubles through the legacy normal and back: the RandomState ends
     where its own calls leave it, the cached normal included."""
-    from tasks import kernels
-    from tasks.navigation import TaskStream
+    from tasks.kernels import stream as kernels
+    from tasks.kernels.stream import TaskStream
     ours, theirs = np.random.RandomState(3), np.random.RandomState(3)
     stream = TaskStream(ours)
     for n_z in (7, 8, 3):

@@ -9,6 +9,7 @@ from gymnasium.utils.env_checker import check_env
 
 import tasks
 import tasks.gym
+from tasks.kernels import bindings
 
 IDS = [tasks.gym.env_id(name) for name in tasks.ROBOTS]
 
@@ -65,10 +66,10 @@ def test_reset_with_a_seed_reproduces_a_trajectory(env_id):
         return np.array(out)
 
     from tasks import kernels
-    timer = kernels._TIMER_CALLBACK.value  # step turns MuJoCo's timers off, then back on
+    timer = bindings._TIMER_CALLBACK.value  # step turns MuJoCo's timers off, then back on
     a, b = gymnasium.make(env_id), gymnasium.make(env_id)
     first = rollout(a, 7)
-    assert kernels._TIMER_CALLBACK.value == timer is not None
+    assert bindings._TIMER_CALLBACK.value == timer is not None
     rollout(a, 8)  # something else in between
     assert np.array_equal(first, rollout(a, 7)) and np.array_equal(first, rollout(b, 7))
     assert not np.array_equal(first, rollout(b, 8))

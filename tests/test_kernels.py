@@ -1,4 +1,5 @@
-"""The tasks' compiled step (tasks.kernels) against dm_control's hooks, step for step."""
+"""The tasks' compiled step (tasks.kernels.steps.step) against dm_control's hooks (which call
+the drives' same kernels one hook at a time, drawing from the RandomState), step for step."""
 import contextlib
 
 import mujoco
@@ -6,7 +7,8 @@ import numpy as np
 import pytest
 
 import tasks
-from tasks import kernels
+from tasks.kernels import bindings
+from tasks.kernels.floating import hull_normal
 
 
 def _pair(robot, **fields):
@@ -31,10 +33,12 @@ def _pair(robot, **fields):
     ("floating", {"velocity_noise": 0.1, "velocity_code": "code"}),
     ("floating", {"velocity_code": "code", "sensor_noise": 0.0}),
     ("floating", {"velocity_noise": 0.05, "wall_friction": 0.3}),
+    ("point", {}),
+    ("point_mass", {}),
 ])
 def test_the_compiled_step_is_the_hooks_step_for_step(robot, fields):
     compiled, hooks = _pair(robot, **fields)
-    assert compiled.task.kind is not None  # the drive has a compiled step
+    assert compiled.steps_compiled and not hooks.steps_compiled
     dim = compiled.action_spec().shape[0]
     rng = np.random.default_rng(3)
     ts = [compiled.reset(), hooks.reset()]
@@ -78,12 +82,12 @@ def test_the_compiled_step_refuses_what_the_hooks_refuse():
 def test_the_struct_views_are_the_fields_they_name():
     env = tasks.load("two_wheel", seed=0)
     m, d = env.physics.model.ptr, env.physics.data.ptr
-    flags = kernels.disable_flags(m)
+    flags = bindings.disable_flags(m)
     assert flags[0] == m.opt.disableflags
     flags[0] ^= int(mujoco.mjtDisableBit.mjDSBL_WARMSTART)
     assert flags[0] == m.opt.disableflags
     flags[0] ^= int(mujoco.mjtDisableBit.mjDSBL_WARMSTART)
-    count = kernels.warning_count(d, mujoco.mjtWarning.mjWARN_BADQACC)
+    count = bindings.warning_count(d, mujoco.mjtWarning.mjWARN_BADQACC)
     d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number = 3
     assert count[0] == 3
     d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number = 0
@@ -94,8 +98,8 @@ def test_the_contact_views_read_mujocos_contacts():
     env = tasks.load("floating", seed=0, bump="grip")
     physics = env.physics
     d = physics.data.ptr
-    ncon = kernels.contact_count(d)
-    floats, ints, layout = kernels.contact_views(d)
+    ncon = bindings.contact_count(d)
+    floats, ints, layout = bindings.contact_views(d)
     hull_id = physics.hull
     env.reset()
     # the puck pressed into the west wall, then into the south-west corner
@@ -104,7 +108,7 @@ def test_the_contact_views_read_mujocos_contacts():
         physics.set_robot_pose(x, y)
         assert d.ncon >= 1 and ncon[0] == d.ncon
         normal = np.zeros(2)
-        assert kernels.hull_normal(ncon, floats, ints, layout, hull_id,
+        assert hull_normal(ncon, floats, ints, layout, hull_id,
                                    normal)
         for k in range(d.ncon):
             c = d.contact[k]
@@ -118,7 +122,7 @@ def test_the_contact_views_read_mujocos_contacts():
         assert normal[0] > 0.5  # from the wall into the robot: east
     # nothing touched: no normal
     physics.set_robot_pose(*physics.start[:2])
-    assert d.ncon == 0 and not kernels.hull_normal(ncon, floats, ints, layout,
+    assert d.ncon == 0 and not hull_normal(ncon, floats, ints, layout,
                                                    hull_id, np.zeros(2))
     env.close()
 
@@ -128,7 +132,7 @@ def test_stage_timers_off_changes_nothing_but_the_timers(robot):
     """MuJoCo's timer callback (set by the mujoco package) fills mjData.timer and nothing
     else: with it off the same steps give the same state bit for bit, the timers do not
     advance, and the callback is back after the block."""
-    before = kernels._TIMER_CALLBACK.value
+    before = bindings._TIMER_CALLBACK.value
     assert before is not None  # the mujoco package sets one at import
     runs = []
     for off in (False, True):
@@ -137,16 +141,16 @@ def test_stage_timers_off_changes_nothing_but_the_timers(robot):
         rng = np.random.default_rng(1)
         position = env.physics.data.timer[mujoco.mjtTimer.mjTIMER_POSITION]  # mj_step1's
         start = position.duration
-        with kernels.stage_timers_off() if off else contextlib.nullcontext():
+        with bindings.stage_timers_off() if off else contextlib.nullcontext():
             if off:
-                assert kernels._TIMER_CALLBACK.value is None
+                assert bindings._TIMER_CALLBACK.value is None
             obs = [env.step(rng.uniform(-1, 1, env.action_spec().shape)).observation
                    for _ in range(200)]
         timed = position.duration - start
         runs.append((obs, env.physics.data.qpos.tobytes(), env.physics.data.qvel.tobytes(),
                      env.physics.robot_pose(), timed))
         env.close()
-    assert kernels._TIMER_CALLBACK.value == before
+    assert bindings._TIMER_CALLBACK.value == before
     (obs_on, *state_on, timed_on), (obs_off, *state_off, timed_off) = runs
     assert state_on == state_off
     for a, b in zip(obs_on, obs_off):

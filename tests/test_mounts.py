@@ -222,10 +222,11 @@ def test_mounted_planar_robots_do_what_their_drive_promises():
             assert e.max() <= limits[key], (name, key, e.max())
 
 
-def test_the_fused_loop_refuses_the_hooks_only_drives_and_takes_a_mounted_two_wheel_robot():
-    """The gait and the car's motors (MotorWheelPhysics) run on the hooks only."""
+def test_the_fused_loop_takes_every_shipped_mount():
+    """Every drive is compiled (tasks.kernels): the gait, the car's motors
+    (MotorWheelPhysics), the point's servos, the point mass's thrusters."""
     from experiments.running import fused
-    for name, supported in (("ant", False), ("car", False), ("point", True)):
+    for name, supported in ((name, True) for name in tasks.MOUNTS):
         env = tasks.load(name, seed=0)
         try:
             agent = protocol.make_agent(protocol.RunSpec(name, "avoidance", 0, 10), env)
@@ -330,7 +331,7 @@ def test_the_car_runs_through_its_own_motors_and_adds_no_actuator():
                       "actuator_biasprm", "tendon_adr", "wrap_prm"):
             assert np.array_equal(getattr(m, field), getattr(own, field)), field
         physics = env.physics
-        assert isinstance(physics, two_wheel.MotorWheelPhysics) and not env.steps_compiled
+        assert isinstance(physics, two_wheel.MotorWheelPhysics) and env.steps_compiled
         assert np.allclose(physics.motor_forces, [[0.5, 0.5], [-0.5, 0.5]], atol=1e-12)
         assert (physics.kp, physics.kv) == (0.2, 0.01)
     finally:
@@ -342,7 +343,7 @@ def test_the_motor_controls_by_hand():
     c0 - c1 = 1, c0 + 2 c1 = 4, so c = (2, 1); clipped to [-1.5, 1.5] x [-1, 0.5]:
     (1.5, 0.5). Three motors [[1, 0], [0, 1], [1, 1]] and tau = (1, 2): the least-norm c
     is M (M^T M)^-1 tau = M (0, 1) = (0, 1, 1) (the exact (1, 2, 0) has a larger norm)."""
-    from tasks.wheel_kernels import gram, motor_controls
+    from tasks.kernels.motors import gram, motor_controls
     c = np.zeros(2)
     inf = np.full(2, np.inf)
     m2 = np.array([[1.0, 1.0], [-1.0, 2.0]])

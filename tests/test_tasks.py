@@ -7,7 +7,9 @@ from absl.testing import absltest
 from dm_env import test_utils
 
 import tasks
-from tasks import kernels, navigation
+from tasks import navigation
+from tasks.kernels import sensing
+from tasks.kernels.two_wheel import away_sign
 
 # The room as the issue states it, written out independently of room.xml:
 # field 0..90 x 0..60 units, obstacles as (xmin, xmax, ymin, ymax).
@@ -182,10 +184,10 @@ def test_a_leftover_turn_away_mirrors_the_commanded_one():
 
 def test_away_sign_by_hand():
     inf = np.inf
-    assert kernels.away_sign(np.array([3.0, inf, inf, 1.0, inf, 5.0, inf]), 1.0) == -1.0
-    assert kernels.away_sign(np.array([inf, 6.0, inf, 0.0, 2.0, inf, inf]), -1.0) == 1.0
-    assert kernels.away_sign(np.array([2.0, inf, inf, 0.0, inf, inf, 2.0]), 1.0) == 1.0
-    assert kernels.away_sign(np.full(7, inf), -1.0) == -1.0  # nothing seen: commanded
+    assert away_sign(np.array([3.0, inf, inf, 1.0, inf, 5.0, inf]), 1.0) == -1.0
+    assert away_sign(np.array([inf, 6.0, inf, 0.0, 2.0, inf, inf]), -1.0) == 1.0
+    assert away_sign(np.array([2.0, inf, inf, 0.0, inf, inf, 2.0]), 1.0) == 1.0
+    assert away_sign(np.full(7, inf), -1.0) == -1.0  # nothing seen: commanded
 
 
 def test_floating_thrust_and_coast():
@@ -375,7 +377,7 @@ def test_compiled_sensing_equals_the_numpy_formula_bit_for_bit():
     np.maximum(code, 0.0, out=code)
     noise = rng.normal(0.0, 12.75, size=code.shape)
     noisy = np.minimum(np.maximum(code + noise, 0.0), 255)
-    got = kernels.surface_distances(raw, 1.0 / 0.1, radius)
+    got = sensing.surface_distances(raw, 1.0 / 0.1, radius)
     assert got.tobytes() == distance.tobytes()
     assert navigation.encode_range(got).tobytes() == code.tobytes()
     assert navigation.encode_range(got, noise).tobytes() == noisy.tobytes()

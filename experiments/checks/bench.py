@@ -9,7 +9,7 @@ pass over a full memory (one matrix-vector product and the top-N_r selection). T
 column "tasks" is env.step less the raw physics: the tasks' own work around MuJoCo.
 "fused loop" is the protocol's own loop, `ebrl run`'s: the same steps in stretches of
 one compiled call each (experiments.running.fused), timed over blocks of N steps after the rest.
-Everything runs with MuJoCo's stage timers off, as a run does (tasks.kernels.stage_timers_off).
+Everything runs with MuJoCo's stage timers off, as a run does (tasks.kernels.bindings.stage_timers_off).
 """
 import statistics
 import time
@@ -88,7 +88,7 @@ def measure(robot, steps, blocks=5):
 
 
 def main(steps=2000, blocks=5, robots=None):
-    from tasks.kernels import stage_timers_off
+    from tasks.kernels.bindings import stage_timers_off
     from tasks.robots import ROBOTS
     with stage_timers_off():  # as `ebrl run` steps (protocol.execute), raw physics too
         rows = [measure(robot, steps, blocks) for robot in (robots or tuple(ROBOTS))]

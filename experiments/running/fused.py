@@ -3,12 +3,12 @@
 
 The step-by-step loop runs, per agent step, `ebrl.Agent.act`, `tasks.Environment.step`
 and `ebrl.Agent.learn`: each a little Python around one compiled function
-(`ebrl.agent.act_step`, `tasks.kernels.step` with the task's draws
-`tasks.kernels.task_draws`, `ebrl.kernels.learn_step`, and at a goal
+(`ebrl.agent.act_step`, `tasks.kernels.steps.step` with the task's draws
+`tasks.kernels.stream.task_draws`, `ebrl.kernels.learn_step`, and at a goal
 `ebrl.agent.trial_end`). `run` iterates those same functions inside one numba call, up
 to a trial's end, on the same named records: the agent's (`Agent.record`, its numpy
 Generator inside, drawn in place), its fallback's (`Agent.fallback_record`), the drive's
-(`Physics.record`, tasks.kernels.Drive) and the task's random stream
+(`Physics.record`, the drive's record: tasks.kernels) and the task's random stream
 (`Navigation.stream.record`, buffered doubles of its RandomState). So the Python per step
 (argument checks, the dm_env TimeStep, the observation dict, bookkeeping) is paid once
 per stretch.
@@ -26,7 +26,9 @@ from numba.experimental import structref
 
 from ebrl import kernels as agent_kernels
 from ebrl.agent import act_step, invalid_observation, trial_end
-from tasks import kernels as task_kernels
+from tasks.kernels import bindings, body
+from tasks.kernels import steps as drive_steps
+from tasks.kernels.stream import task_draws
 from tasks import navigation
 
 #: Why a stretch ended.
@@ -80,7 +82,7 @@ def run(steps, agent, fallback, drive, stream, io, trace, first):
     n_codes = io.codes.shape[0]
     io.substeps = 0
     for k in range(steps):
-        if not task_kernels.task_draws(stream, io.u, io.z, io.sensor_noise, io.vz,
+        if not task_draws(stream, io.u, io.z, io.sensor_noise, io.vz,
                                        io.velocity_noise):
             return k, REFILL
         observe(io)
@@ -88,14 +90,14 @@ def run(steps, agent, fallback, drive, stream, io, trace, first):
         if act_step(agent, fallback, io.obs, ranges) == agent_kernels.INVALID:
             return k, INVALID
         io.env_action[:] = agent.action
-        status, n, goal = task_kernels.step(drive, io.env_action, io.u, io.z, io.vz,
+        status, n, goal = drive_steps.step(drive, io.env_action, io.u, io.z, io.vz,
                                             io.codes, io.velocity)
         io.substeps += n
-        if status != task_kernels.OK:
+        if status != bindings.OK:
             io.status = status
             return k, FAILED
         agent_kernels.learn_step(agent, 1.0 if goal else 0.0)
-        x, y, _ = task_kernels.base_pose(drive)
+        x, y, _ = body.base_pose(drive)
         trace[first + k, 0] = x
         trace[first + k, 1] = y
         if goal:
@@ -157,7 +159,7 @@ class Loop:
             if "velocity" in observation:
                 self._velocity[:] = observation["velocity"]
         done, why, stream = 0, REFILL, task.stream
-        substeps, status = 0, task_kernels.OK
+        substeps, status = 0, bindings.OK
         while why == REFILL and done < steps:
             stream.ready()
             k, why = run(steps - done, agent.record, agent.fallback_record,
@@ -168,7 +170,7 @@ class Loop:
                 stream.fill()
         goal = why == GOAL
         env.advance(done, goal)
-        task.finish(substeps, goal, physics, status if why == FAILED else task_kernels.OK)
+        task.finish(substeps, goal, physics, status if why == FAILED else bindings.OK)
         if why == INVALID:
             raise invalid_observation(self._obs)
         return done, goal

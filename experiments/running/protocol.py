@@ -292,7 +292,7 @@ def execute(spec, on_step=None, fused=True):
     one compiled call each (Trials); fused=False forces the step-by-step loop.
     """
     import tasks
-    from tasks.kernels import stage_timers_off
+    from tasks.kernels.bindings import stage_timers_off
 
     env_seed, _ = seeds_for(spec.seed)
     env = tasks.load(spec.entry, seed=env_seed, config=spec.task_config())

@@ -1,0 +1,185 @@
+"""The gait's compiled step: the two-wheel action family (tasks.two_wheel.family) walked
+by a trotting central pattern generator with heading feedback (tasks.gait's docstring).
+
+`walk` runs n control ticks of the CPG and the PD loops; `turn` and `move` close the
+heading and distance feedback around it; `stop` is the one substep dm_control's
+environment ran after the gait's step (kept: the same bits as the hooks before the gait
+was compiled).
+"""
+import math
+
+import numpy as np
+
+from numba import njit
+
+from ebrl import records
+from tasks.kernels import bindings
+from tasks.kernels.body import BODY_FIELDS, base_pose, step_phase
+from tasks.kernels import two_wheel as family
+
+
+@records.record(
+    *BODY_FIELDS, *family.FAMILY_FIELDS,
+    # the 4 hips' then the 4 ankles' actuators, their joints' qpos and dof addresses,
+    # the joints' rest angles, the controls' ranges; each hip's forward and turning
+    # shares and each ankle's lift sign; each leg's phase offset (cycles)
+    "acts", "q", "dq", "rest", "ctrl_lo", "ctrl_hi", "forward_share", "turn_share",
+    "lift_sign", "offset",
+    # the gait's parameters (tasks.gait.PARAMETERS): PD gains, seconds per control tick,
+    # the CPG's amplitude, lift and frequency, the heading feedback, the move's
+    # slow-down and coast, the phases' time limits, the feedback's ticks per update and
+    # the settling's
+    "kp", "kd", "tick", "control_substeps", "amplitude", "lift", "frequency",
+    "heading_gain", "turn_tolerance", "slow_down", "coast", "max_turn_seconds",
+    "max_move_seconds", "feedback_seconds", "n_feedback", "n_settle",
+    # the CPG's state: its phase (cycles), the joints' targets; scratch: the hips' shares
+    "phase", "target", "share")
+class GaitDrive(records.Record):
+    """The gait's record (the fields' comments)."""
+
+
+@njit(cache=True)
+def _new_gait(*values):
+    """GaitDrive's cached constructor (ebrl.records)."""
+    return GaitDrive(*values)
+
+
+GaitDrive.constructor = _new_gait
+
+
+@njit(cache=True)
+def remainder(x, y):
+    """math.remainder(x, y) for y > 0, exactly (numba has no math.remainder): fmod is
+    exact, r - y and r + y for |r| > y / 2 are exact (Sterbenz's lemma), and a tie
+    |r| = y / 2 goes to the even quotient (its parity from fmod(x, 2 y), also exact)."""
+    r = np.fmod(x, y)
+    half = 0.5 * y
+    if r > half or (r == half and abs(np.fmod(x, 2.0 * y)) >= y):
+        return r - y
+    if r < -half or (r == -half and abs(np.fmod(x, 2.0 * y)) >= y):
+        return r + y
+    return r
+
+
+@njit(cache=True)
+def walk(s, n, amp, lift, freq):
+    """n ticks of the trot: each sets the 4 hips' and 4 ankles' targets from the phase
+    (the hips' shares in s.share), the motors' controls by PD (clipped to their ranges),
+    runs control_substeps substeps and advances the phase by frequency * tick seconds.
+    Returns (the first non-OK status of tasks.bindings.run (a fall: TIPPED), else OK;
+    the substeps run)."""
+    kp, kd, tick = s.kp, s.kd, s.tick
+    k = s.control_substeps
+    phase, target, share, rest, qpos, qvel = s.phase, s.target, s.share, s.rest, s.qpos, s.qvel
+    legs = len(share)
+    for t in range(n):
+        for i in range(legs):
+            phi = 2.0 * math.pi * (phase[0] + s.offset[i])
+            target[i] = rest[i] + amp * share[i] * -math.cos(phi)
+            v = -math.sin(phi)
+            target[legs + i] = rest[legs + i] + lift * s.lift_sign[i] * (v if v > 0.0 else 0.0)
+        for j in range(2 * legs):
+            u = kp * (target[j] - qpos[s.q[j]]) - kd * qvel[s.dq[j]]
+            s.ctrl[s.acts[j]] = min(max(u, s.ctrl_lo[j]), s.ctrl_hi[j])
+        status = bindings.run(s.m, s.d, k, s.bad_qacc, s.xmat, True, s.min_cos_tilt)
+        if status != bindings.OK:
+            return status, n * k
+        phase[0] = (phase[0] + freq * tick) % 1.0
+    return bindings.OK, n * k
+
+
+@njit(cache=True)
+def control(s, forward, turn):
+    """One feedback interval of walking at the commands (forward in [0, 1], turn in
+    [-1, 1], counter-clockwise positive): the hips' shares forward * forward_share +
+    turn * turn_share, scaled down so none exceeds 1."""
+    share = s.share
+    top = 0.0
+    for i in range(share.shape[0]):
+        share[i] = forward * s.forward_share[i] + turn * s.turn_share[i]
+        top = max(top, abs(share[i]))
+    scale = max(1.0, top)
+    for i in range(share.shape[0]):
+        share[i] = share[i] / scale
+    return walk(s, s.n_feedback, s.amplitude, s.lift, s.frequency)
+
+
+@njit(cache=True)
+def hold(s):
+    """The legs back to rest for the settling seconds (the phase held)."""
+    s.share[:] = 0.0
+    return walk(s, s.n_settle, 0.0, 0.0, 0.0)
+
+
+@njit(cache=True)
+def heading(s):
+    """The base's heading: its frame's x axis in the plane."""
+    return math.atan2(s.xmat[3], s.xmat[0])
+
+
+@njit(cache=True)
+def clip_command(v):
+    """v clipped to [-1, 1] as Python's max(-1, min(1, v))."""
+    v = v if v < 1.0 else 1.0
+    return v if v > -1.0 else -1.0
+
+
+@njit(cache=True)
+def turn(s, angle, leftover):
+    """Turns by `angle` rad (counter-clockwise) with heading feedback until within the
+    tolerance or the time limit, then settles. The step's own turn is walked only when
+    larger than the tolerance; a leftover turn always."""
+    if not leftover and not abs(angle) > s.turn_tolerance:
+        return bindings.OK, 0
+    target = heading(s) + angle
+    chunk = s.feedback_seconds
+    t = 0.0
+    n = 0
+    while t < s.max_turn_seconds:
+        err = remainder(target - heading(s), 2 * math.pi)
+        if abs(err) < s.turn_tolerance:
+            break
+        status, k = control(s, 0.0, clip_command(s.heading_gain * err))
+        n += k
+        if status != bindings.OK:
+            return status, n
+        t += chunk
+    status, k = hold(s)
+    return status, n + k
+
+
+@njit(cache=True)
+def move(s, distance):
+    """Walks `distance` units along the heading the move starts with: forward 1 (less
+    over the last slow_down units), heading feedback, until within `coast` of the
+    target or the time limit; then settles."""
+    x0, y0, h0 = base_pose(s)
+    c, sn = math.cos(h0), math.sin(h0)
+    chunk = s.feedback_seconds
+    t, done = 0.0, 0.0
+    n = 0
+    while distance - done > s.coast and t < s.max_move_seconds:
+        err = remainder(h0 - heading(s), 2 * math.pi)
+        r = (distance - done) / s.slow_down
+        r = r if r > 0.3 else 0.3
+        forward = r if r < 1.0 else 1.0
+        status, k = control(s, forward, clip_command(s.heading_gain * err))
+        n += k
+        if status != bindings.OK:
+            return status, n
+        t += chunk
+        x, y, _ = base_pose(s)
+        done = (x - x0) * c + (y - y0) * sn
+    if distance > s.coast:
+        status, k = hold(s)
+        return status, n + k
+    return bindings.OK, n
+
+
+@njit(cache=True)
+def stop(s):
+    """One substep at the last controls."""
+    return step_phase(s, 1), 1
+
+
+family.realisation(GaitDrive, turn, move, stop)

@@ -1,0 +1,56 @@
+"""The two-wheel family on a planar base: velocity servos ``forward`` and ``turn`` (and
+``grip``) drive the speed along the heading and the yaw rate directly (the paper's
+``two_wheel`` robot). A turn of angle A over n substeps is the yaw rate A / (n dt), a
+move of D units the speed D / (n dt); the servos are deadbeat, so the phase does it."""
+from numba import njit
+
+from ebrl import records
+from tasks.kernels import bindings, two_wheel as family
+from tasks.kernels.body import BODY_FIELDS, step_phase
+
+
+@records.record(*BODY_FIELDS, *family.FAMILY_FIELDS, "forward_actuator", "turn_actuator")
+class PlanarDrive(records.Record):
+    """The planar base's record: the body, the family's fields, the two servos' ids."""
+
+
+@njit(cache=True)
+def _new_planar(*values):
+    """PlanarDrive's cached constructor (ebrl.records)."""
+    return PlanarDrive(*values)
+
+
+PlanarDrive.constructor = _new_planar
+
+
+@njit(cache=True)
+def drive(s, speed, yaw_rate):
+    """Servo targets: speed in units/s along the heading, yaw rate in rad/s."""
+    s.ctrl[s.forward_actuator] = speed * s.unit
+    s.ctrl[s.turn_actuator] = yaw_rate
+
+
+@njit(cache=True)
+def turn(s, angle, leftover):
+    """Turns by `angle` rad counter-clockwise over the turn phase's substeps."""
+    n = s.n_turn
+    drive(s, 0.0, angle / (n * s.timestep))
+    return step_phase(s, n), n
+
+
+@njit(cache=True)
+def move(s, distance):
+    """Moves `distance` units forward over the move phase's substeps."""
+    n = s.n_move
+    drive(s, distance / (n * s.timestep), 0.0)
+    return step_phase(s, n), n
+
+
+@njit(cache=True)
+def stop(s):
+    """Both servos' speeds 0."""
+    drive(s, 0.0, 0.0)
+    return bindings.OK, 0
+
+
+family.realisation(PlanarDrive, turn, move, stop)

@@ -1,0 +1,84 @@
+"""The two-wheel family on two wheel hinges rolling on the floor, ``left_wheel`` and
+``right_wheel``, each under an integrated-velocity servo (the ``diff_drive`` robot): the
+control is the wheel's speed, the servo's target angle integrates it and a PD loop on
+the wheel's angle follows. A phase of n substeps sets the speeds that turn the wheels by
+the phase's angles (a turn: opposite, a move: alike) over its first RAMP share of the
+substeps, then zero speeds for the rest, the servos settling on their targets; the halt
+puts the targets where the wheels are, so a stalled wheel gives up the rest."""
+from numba import njit
+
+from ebrl import records
+from tasks.kernels import bindings, two_wheel as family
+from tasks.kernels.body import BODY_FIELDS, step_phase
+
+
+#: Share of a phase over which the wheels' targets move; the rest is for settling.
+RAMP = 0.5
+#: The wheel plan's fields: the substeps of the turn's and the move's ramps, half the
+#: track (m) and the wheels' radius (m).
+PLAN_FIELDS = ("ramp_turn", "ramp_move", "half_track", "wheel_radius")
+
+
+def ramp_substeps(n):
+    """The substeps of an n-substep phase over which the wheels' targets move."""
+    return max(1, round(RAMP * n))
+
+
+@records.record(*BODY_FIELDS, *family.FAMILY_FIELDS, *PLAN_FIELDS, "left_actuator",
+                "right_actuator", "left_act", "right_act", "left_q", "right_q")
+class WheelDrive(records.Record):
+    """The wheels' record: the body, the family's fields, the plan's, the servos' ids,
+    their activations' (act) and the wheel hinges' qpos addresses."""
+
+
+@njit(cache=True)
+def _new_wheels(*values):
+    """WheelDrive's cached constructor (ebrl.records)."""
+    return WheelDrive(*values)
+
+
+WheelDrive.constructor = _new_wheels
+
+
+@njit(cache=True)
+def phase(s, left, right, n, ramp):
+    """A phase of n substeps turning the wheels by (left, right) rad over the first
+    `ramp` substeps, then zero speeds for the rest. Returns (status, substeps)."""
+    dt = s.timestep
+    s.ctrl[s.left_actuator] = left / (ramp * dt)
+    s.ctrl[s.right_actuator] = right / (ramp * dt)
+    status = step_phase(s, ramp)
+    if status != bindings.OK:
+        return status, n
+    s.ctrl[s.left_actuator] = 0.0
+    s.ctrl[s.right_actuator] = 0.0
+    if n > ramp:
+        status = step_phase(s, n - ramp)
+    return status, n
+
+
+@njit(cache=True)
+def turn(s, angle, leftover):
+    """Turns by `angle` rad counter-clockwise: the wheels by -+angle * half track / radius."""
+    w = angle * s.half_track / s.wheel_radius
+    return phase(s, -w, w, s.n_turn, s.ramp_turn)
+
+
+@njit(cache=True)
+def move(s, distance):
+    """Moves `distance` units forward: both wheels by distance / radius."""
+    w = distance * s.unit / s.wheel_radius
+    return phase(s, w, w, s.n_move, s.ramp_move)
+
+
+@njit(cache=True)
+def stop(s):
+    """The wheels' speeds 0 and their targets where the wheels are."""
+    s.ctrl[s.left_actuator] = 0.0
+    s.act[s.left_act] = s.qpos[s.left_q]
+    s.ctrl[s.right_actuator] = 0.0
+    s.act[s.right_act] = s.qpos[s.right_q]
+    return bindings.OK, 0
+
+
+family.realisation(WheelDrive, turn, move, stop)
