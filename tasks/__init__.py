@@ -112,10 +112,9 @@ def load(robot, *, drive=None, seed=None, config=None, **fields):
                         if models.PREFIX + act in names), physics_classes[next(iter(physics_classes))])
     if entry.mount is not None:
         from tasks import mount
-        physics_cls = mount.physics_class(entry.mount)
-        if entry.mount.action[0] == "gait":
-            from tasks import gait
-            task_cls = gait.Gait
+        mounted = mount.classes(entry.mount)
+        physics_cls = mounted.physics
+        task_cls = mounted.task or task_cls
     try:
         physics = physics_cls.from_model(wrapper.MjModel(model))
     except navigation.ContractError as e:

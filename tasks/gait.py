@@ -181,6 +181,6 @@ class Gait(navigation.Navigation):
                     **physics.episode_settings())
 
 
-def physics_class(mount):
-    """gait.Physics with the mount's parameters."""
-    return type("GaitPhysics", (Physics,), {"gait": PARAMETERS | dict(mount.gait)})
+def physics_class(parameters):
+    """gait.Physics with a mount's parameters (a dict of PARAMETERS' names)."""
+    return type("GaitPhysics", (Physics,), {"gait": PARAMETERS | dict(parameters)})

@@ -14,6 +14,10 @@ nothing heavy, so the command line can check names before any work.
 """
 import dataclasses
 import pathlib
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from tasks.mount import Mount
 
 MODEL_DIR = pathlib.Path(__file__).resolve().parents[1] / "models"
 #: The shipped mounts (tasks.mount): third-party robot files, unchanged, by name.
@@ -82,8 +86,8 @@ class Robot:
     #: Metres per paper unit: the room, the start, the goal and the beams' range scale
     #: with it (models.compose); every distance the task reports stays in paper units.
     unit: float = PAPER_UNIT
-    #: The mount (tasks.mount.Mount) that enters a file not of the naming contract.
-    mount: object = None
+    #: The mount that enters a file not of the naming contract.
+    mount: "Mount | None" = None
     #: `ebrl check`'s accuracy limits where the drive's 5% is not asked of the body (a
     #: mount's [check]), as (error, limit) pairs.
     accuracy_limits: tuple = ()

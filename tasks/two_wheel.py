@@ -225,12 +225,10 @@ def motor_forces(model, motors, dofs):
     return forces
 
 
-def motor_wheel_physics(mount):
-    """MotorWheelPhysics with a wheel_motors mount's motor count and gains."""
-    gains = dict(mount.gait)
-    motors = [name for role, name in mount.action[1:] if role not in WHEEL_JOINTS]
+def motor_wheel_physics(motor_count, kp, kv):
+    """MotorWheelPhysics with a wheel_motors mount's motor count and PD gains."""
     return type("MotorWheelPhysics", (MotorWheelPhysics,),
-                {"motor_count": len(motors), "kp": gains["kp"], "kv": gains["kv"]})
+                {"motor_count": motor_count, "kp": kp, "kv": kv})
 
 
 #: The realisations a robot file picks by an actuator's contract name (tasks.load); a

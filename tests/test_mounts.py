@@ -1,4 +1,4 @@
-"""Mounts (tasks/mount.py): third-party robot files entered unchanged, the room scaled to
+"""Mounts (tasks/mount/): third-party robot files entered unchanged, the room scaled to
 the robot, in real MuJoCo, from the real installed packages, through the real command line."""
 import hashlib
 import importlib.resources
@@ -182,6 +182,26 @@ BAD = [
         '"dm_control:', '"{{ant}}').replace("third_party/ant/ant.xml", ""),
      "action.gait.speed: unknown key"),
 ]
+
+
+def test_each_action_kind_is_one_registered_class_and_a_mount_is_named_records():
+    """The drives take the kinds in their registration order (the errors list them so);
+    the shipped mounts parse to named records, by kind."""
+    assert mount.ACTIONS == {"two_wheel": ("servos", "actuators", "wheels", "wheel_motors", "gait"),
+                             "floating": ("thrusters", "actuators")}
+    for name, kind in mount.KINDS.items():
+        assert kind.name == name and issubclass(kind, mount.Action)
+    car = mount.parse(MOUNTS / "car.toml")
+    assert car.action == mount.KINDS["wheel_motors"](left="left", right="right",
+                                                     motors=("forward", "turn"), kp=0.2, kv=0.01)
+    assert car.bumper == mount.Bumper(shape="sphere", radius=0.12)
+    assert car.beams == mount.Beams(height=0.04) and car.beams.added
+    ant = mount.parse(MOUNTS / "ant.toml")
+    assert ant.action.name == "gait" and len(ant.action.motors) == 8
+    assert dict(ant.action.parameters) == {"frequency": 1.0, "control_substeps": 1.0}
+    point, point_mass = mount.parse(MOUNTS / "point.toml"), mount.parse(MOUNTS / "point_mass.toml")
+    assert point.bumper == mount.Bumper(geom="pointbody") and point.action == mount.KINDS["servos"]()
+    assert point_mass.action.name == "thrusters" and point_mass.drive == "floating"
 
 
 @pytest.mark.parametrize("text, message", BAD)

@@ -14,7 +14,7 @@ from experiments.running import settings
 def robot_list(text):
     """--robot: a registered name, several joined by commas, "paper" (the paper's two
     robots), "all" (every registered robot), or a path to a robot .xml file (with
-    --drive), or a mount (a shipped mount's name, or a .toml file: tasks/mount.py). The
+    --drive), or a mount (a shipped mount's name, or a .toml file: tasks/mount/). The
     names come from the registry, tasks/robots.py."""
     from tasks.robots import MOUNTS, PAPER_ROBOTS, ROBOTS
     if text == "paper":

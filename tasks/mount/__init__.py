@@ -1,0 +1,55 @@
+"""Mounts: an unchanged robot file entered into the room by a small TOML file.
+
+A robot file of the naming contract (docs/adding_a_robot.md: a body ``base``, a geom
+``hull``, rangefinders, the drive's actuators) needs no mount. Any other file does: its
+mount says which body is the base, its root joints, its bumper, its beams, how the
+drive's action reaches it and what of the file to drop. The file is read where it lies
+(a path beside the mount, or ``package:path`` inside an installed package, resolved at
+load time, never copied) and edited only in memory, as an MjSpec, before it is attached
+to the room (models.compose). What the mount adds carries the contract's names; what it
+names of the file is mapped in the model's text element models.NAMES_TEXT, which
+tasks.navigation reads, so a mounted model is as self-describing as a contract file.
+
+    name = "point"                      # default: the mount file's stem
+    description = "..."
+    file = "gymnasium:envs/mujoco/assets/point.xml"
+    drive = "two_wheel"                 # a key of ACTIONS (tasks.robots.DRIVES)
+    unit = 0.3333333333333333           # metres per paper unit (default 0.1)
+    base = "torso"                      # the body whose frame is the robot's pose
+    joints = "file"                     # "file" (the base's own), "free", "planar"
+    drop = ["world", "lights", "skybox", "actuators"]
+    keep_options = []                   # of the file's <option>: timestep, integrator, flags
+    time_scale = 1.0                    # also timestep, integrator: the registry's fields
+    [bumper]                            # geom = "a geom of the file", or an added shape:
+    geom = "pointbody"                  # shape = "sphere" | "capsule", radius, height (m)
+    [beams]                             # height = 0.5 (added, the drive's arrangement), or
+    height = 0.5                        # sensors = [the file's rangefinders, in order]
+    [action]
+    kind = "servos"                     # a kind of KINDS: servos, thrusters,
+                                        # actuators, wheels, wheel_motors, gait
+    [readings]                          # TaskConfig or agent fields (Robot.readings)
+
+Every error is one line, ``<mount file>: <field>: <what is wrong>`` (MountError).
+
+The package: `fields` (the one-line checks), `records` (Mount, Bumper, Beams, the Action
+base), `kinds` (one Action class per action kind, registered by name: its fields, its
+edit of the spec, its Task and Physics classes), `parsing` (the TOML file to a Mount),
+`spec` (the Mount to the robot's MjSpec).
+"""
+from tasks.mount.fields import MountError
+from tasks.mount.kinds import KINDS
+from tasks.mount.parsing import ACTIONS, DROPS, JOINTS, OPTIONS, parse, resolve_file
+from tasks.mount.records import Action, Beams, Bumper, Classes, Mount
+from tasks.mount.spec import BEAMS, robot_spec
+
+__all__ = ["parse", "robot_spec", "classes", "Mount", "MountError", "Bumper", "Beams",
+           "Action", "Classes", "KINDS", "ACTIONS", "JOINTS", "DROPS", "OPTIONS", "BEAMS",
+           "resolve_file"]
+
+
+def classes(mount: Mount) -> Classes:
+    """The Task class and substeps function (None: the drive's own) and the Physics class
+    of the mount's action kind: tasks.load's for a mounted robot."""
+    return mount.action.classes(mount)
+import dataclasses
+

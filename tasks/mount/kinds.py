@@ -1,0 +1,318 @@
+"""The action kinds of a mount's [action] table: how the drive's action reaches the
+robot. One class per kind, registered by its name (the only place the name is written),
+each a record of its fields that knows their parsing, which drives take it, what of the
+file it replaces, its edit of the robot's MjSpec, and the Task and Physics classes it
+runs on (tasks.mount.records.Action gives the hooks). Adding a kind is a class here.
+
+The drive modules are imported inside the methods that need them: this module imports
+nothing heavy (the registry reads mounts before any MuJoCo import)."""
+from __future__ import annotations
+
+import dataclasses
+
+from tasks.mount.fields import fail
+from tasks.mount.records import Action, Classes
+from tasks.mount.spec import actuator, file_actuator
+
+#: The action kinds by name, in their registration order (the order ACTIONS lists them).
+KINDS: dict[str, type[Action]] = {}
+
+
+def register(name: str):
+    """Registers an Action subclass as the kind `name`."""
+    def add(cls):
+        cls.name = name
+        KINDS[name] = cls
+        return cls
+    return add
+
+
+@register("servos")
+@dataclasses.dataclass(frozen=True)
+class Servos(Action):
+    """two_wheel.xml's velocity servos added: forward and grip on a site of the base,
+    turn on its yaw hinge (tasks.two_wheel.Physics sets their kv at load)."""
+    drives = ("two_wheel",)
+    drops = frozenset({"actuators"})
+
+    def check_joints(self, fields, joints):
+        if joints == "free":
+            fields.fail("action.kind", "servos drive planar joints (joints = file or planar), "
+                                       "not a free joint")
+
+    def edit(self, mount, spec, base, names):
+        import mujoco
+        base.add_site(name="drive")
+        actuator(spec, "forward", mujoco.mjtTrn.mjTRN_SITE, "drive",
+                       [1, 0, 0, 0, 0, 0]).set_to_velocity(kv=1)
+        actuator(spec, "grip", mujoco.mjtTrn.mjTRN_SITE, "drive",
+                       [0, 1, 0, 0, 0, 0]).set_to_velocity(kv=1)
+        yaw = "yaw" if mount.joints == "planar" else _yaw_joint(mount, base)
+        actuator(spec, "turn", mujoco.mjtTrn.mjTRN_JOINT, yaw).set_to_velocity(kv=1)
+
+    def classes(self, mount):
+        from tasks import two_wheel
+        return Classes(None, two_wheel.Physics)
+
+
+def _yaw_joint(mount, base):
+    import mujoco
+    for j in base.joints:
+        if j.type == mujoco.mjtJoint.mjJNT_HINGE and tuple(j.axis) == (0, 0, 1):
+            return j.name
+    fail(mount.path, "action.kind", f"servos turn a hinge about z on {mount.base!r}; it has "
+                                    "none (joints = \"planar\" adds one)")
+
+
+@register("thrusters")
+@dataclasses.dataclass(frozen=True)
+class Thrusters(Action):
+    """The floating drive's motors added on the base's slides x and y."""
+    drives = ("floating",)
+    drops = frozenset({"actuators"})
+
+    def edit(self, mount, spec, base, names):
+        import mujoco
+        joints = ("x", "y") if mount.joints == "planar" else _slides(mount, base)
+        for role, joint in zip(("thrust_x", "thrust_y"), joints):
+            actuator(spec, role, mujoco.mjtTrn.mjTRN_JOINT, joint).set_to_motor()
+
+    def classes(self, mount):
+        from tasks import floating
+        return Classes(None, floating.Physics)
+
+
+def _slides(mount, base):
+    import mujoco
+    out = {}
+    for j in base.joints:
+        if j.type == mujoco.mjtJoint.mjJNT_SLIDE:
+            out[tuple(j.axis)] = j.name
+    if (1, 0, 0) not in out or (0, 1, 0) not in out:
+        fail(mount.path, "action.kind", f"thrusters push slides along x and y on {mount.base!r}; "
+                                        "it has none (joints = \"planar\" adds them)")
+    return out[(1, 0, 0)], out[(0, 1, 0)]
+
+
+#: The contract's actuator names an "actuators" action maps, by drive, and those it needs.
+ACTUATOR_ROLES = {"two_wheel": ("forward", "turn", "grip"), "floating": ("thrust_x", "thrust_y")}
+REQUIRED_ROLES = {"two_wheel": ("forward", "turn"), "floating": ("thrust_x", "thrust_y")}
+
+
+@register("actuators")
+@dataclasses.dataclass(frozen=True)
+class Actuators(Action):
+    """The file's own actuators, mapped to the drive's contract names (forward, turn,
+    grip; thrust_x, thrust_y)."""
+    drives = tuple(ACTUATOR_ROLES)
+    keys = frozenset(r for roles in ACTUATOR_ROLES.values() for r in roles)
+    #: (contract name, the file's actuator) pairs, in the drive's order.
+    actuators: tuple[tuple[str, str], ...] = ()
+
+    @classmethod
+    def parse(cls, fields, table, drive):
+        for role in REQUIRED_ROLES[drive]:
+            if role not in table:
+                fields.fail(f"action.{role}", "missing: the file's actuator for it")
+        return cls(tuple((r, fields.text(table, r, f"action.{r}")) for r in ACTUATOR_ROLES[drive]
+                         if r in table))
+
+    def claimed(self):
+        return {role for role, _ in self.actuators}
+
+    def check_file(self, mount, spec, drop, names):
+        for role, name in self.actuators:
+            file_actuator(mount, spec, f"action.{role}", name)
+            if name != role:
+                names[role] = name
+
+    def classes(self, mount):
+        from tasks import floating, two_wheel
+        physics = {"two_wheel": two_wheel.Physics, "floating": floating.Physics}[mount.drive]
+        return Classes(None, physics)
+
+
+def _wheel_joints(fields, table):
+    """The file's wheel joints by role (tasks.two_wheel.WHEEL_JOINTS: left, right)."""
+    from tasks.two_wheel import WHEEL_JOINTS
+    for role in WHEEL_JOINTS:
+        if role not in table:
+            fields.fail(f"action.{role}", "missing: the file's wheel joint")
+    return {r: fields.text(table, r, f"action.{r}") for r in WHEEL_JOINTS}
+
+
+@register("wheels")
+@dataclasses.dataclass(frozen=True)
+class Wheels(Action):
+    """diff_drive.xml's integrated-velocity servos added on the file's wheel joints
+    (tasks.two_wheel.WheelPhysics); the file's actuators are dropped."""
+    drives = ("two_wheel",)
+    keys = frozenset({"left", "right", "kp", "kv", "force"})
+    drops = frozenset({"actuators"})
+    left: str = ""                  # the file's wheel joints
+    right: str = ""
+    # the wheel servos' gains: diff_drive.xml's unless given (kp N m/rad, kv N m s/rad,
+    # force the servo's torque limit, N m)
+    kp: float = 2.0
+    kv: float = 0.05
+    force: float = 0.12
+
+    @classmethod
+    def parse(cls, fields, table, drive):
+        joints = _wheel_joints(fields, table)
+        gains = {k: fields.number(table, k, f"action.{k}", getattr(cls, k))
+                 for k in ("kp", "kv", "force")}
+        return cls(**joints, **gains)
+
+    def claimed(self):
+        return set(self.keys)
+
+    def edit(self, mount, spec, base, names):
+        import mujoco
+        for role, joint in (("left", self.left), ("right", self.right)):
+            if spec.joint(joint) is None:
+                fail(mount.path, f"action.{role}", f"no joint named {joint!r} in {mount.model}")
+            act = actuator(spec, f"{role}_wheel", mujoco.mjtTrn.mjTRN_JOINT, joint)
+            act.set_to_intvelocity(kp=self.kp, kv=self.kv)
+            act.forcerange = [-self.force, self.force]
+            act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+            act.actrange, act.actlimited = [-1e6, 1e6], mujoco.mjtLimited.mjLIMITED_TRUE
+
+    def classes(self, mount):
+        from tasks import two_wheel
+        return Classes(None, two_wheel.WheelPhysics)
+
+
+@register("wheel_motors")
+@dataclasses.dataclass(frozen=True)
+class WheelMotors(Action):
+    """The file's wheel hinges turned through its own motors (torque motors on the wheel
+    joints or on tendons over them), none added: tasks.two_wheel.MotorWheelPhysics."""
+    drives = ("two_wheel",)
+    keys = frozenset({"left", "right", "motors", "kp", "kv"})
+    left: str = ""                  # the file's wheel hinges
+    right: str = ""
+    motors: tuple[str, ...] = ()    # the file's motors that turn them
+    kp: float = 0.0                 # the PD gains on the wheel angles: N m/rad, N m s/rad
+    kv: float = 0.0
+
+    @classmethod
+    def parse(cls, fields, table, drive):
+        joints = _wheel_joints(fields, table)
+        if "motors" not in table:
+            fields.fail("action.motors", "missing: the file's motors that turn the wheels, as a list")
+        motors = fields.names(table, "motors", "action.motors")
+        if len(motors) < 2 or len(set(motors)) != len(motors):
+            fields.fail("action.motors", "needs two or more different motors of the file, "
+                                         f"got {list(motors)}")
+        for k in ("kp", "kv"):
+            if k not in table:
+                fields.fail(f"action.{k}", "missing: the PD gain on the wheel angles (a robot's own)")
+        gains = {k: fields.number(table, k, f"action.{k}", positive=k == "kp") for k in ("kp", "kv")}
+        if gains["kv"] < 0:
+            fields.fail("action.kv", f"must not be negative, got {gains['kv']!r}")
+        return cls(**joints, motors=motors, **gains)
+
+    def claimed(self):
+        return set(self.keys)
+
+    def roles(self):
+        """(contract name, the file's name) pairs: the hinges left and right, the motors
+        motor_0, motor_1, ... (tasks.two_wheel.MOTOR_ROLE)."""
+        from tasks.two_wheel import MOTOR_ROLE
+        return (("left", self.left), ("right", self.right),
+                *((MOTOR_ROLE.format(k), name) for k, name in enumerate(self.motors)))
+
+    def check_joints(self, fields, joints):
+        if joints == "planar":
+            fields.fail("joints", "wheel_motors roll the file's wheels on a free base (joints = "
+                                  "file or free); planar replaces the base's joints and drops the "
+                                  "file's motors")
+
+    def check_file(self, mount, spec, drop, names):
+        """The file's wheel hinges and motors (before the drop: its motors and their
+        tendons are kept)."""
+        import mujoco
+        if "actuators" in drop:
+            fail(mount.path, "drop", "wheel_motors turn the wheels through the file's motors: "
+                                     "do not drop its actuators")
+        hinges = (("left", self.left), ("right", self.right))
+        for role, name in hinges:
+            self._mappable(mount, f"action.{role}", role, name)
+            joint = spec.joint(name)
+            if joint is None:
+                fail(mount.path, f"action.{role}", f"no joint named {name!r} in {mount.model}")
+            if joint.type != mujoco.mjtJoint.mjJNT_HINGE:
+                fail(mount.path, f"action.{role}", f"joint {name!r} is not a hinge (a wheel's joint)")
+        for role, name in self.roles()[len(hinges):]:
+            self._mappable(mount, "action.motors", role, name)
+            motor = file_actuator(mount, spec, "action.motors", name)
+            if motor.trntype == mujoco.mjtTrn.mjTRN_TENDON and "tendons" in drop:
+                fail(mount.path, "drop", f"motor {name!r} pulls a tendon of the file: do not "
+                                         "drop its tendons")
+
+    @staticmethod
+    def _mappable(mount, field, role, name):
+        if role != name and any(ch.isspace() for ch in name):   # models.NAMES_TEXT's pairs
+            fail(mount.path, field, f"{name!r}: a name with spaces cannot be mapped")
+
+    def edit(self, mount, spec, base, names):
+        names.update((role, name) for role, name in self.roles() if role != name)
+
+    def classes(self, mount):
+        from tasks import two_wheel
+        return Classes(None, two_wheel.motor_wheel_physics(len(self.motors), self.kp, self.kv))
+
+
+#: A gait's motors by contract name: hip_0..3, then ankle_0..3 (tasks.gait.LEGS = 4 legs).
+GAIT_ROLES = tuple(f"{j}_{i}" for j in ("hip", "ankle") for i in range(4))
+
+
+@register("gait")
+@dataclasses.dataclass(frozen=True)
+class Gait(Action):
+    """The gait drive (tasks.gait): a legged robot's own hip and ankle motors walk the
+    two-wheel action family."""
+    drives = ("two_wheel",)
+    keys = frozenset({"gait", *GAIT_ROLES})
+    #: (contract name, the file's motor) pairs, those given, in GAIT_ROLES' order.
+    motors: tuple[tuple[str, str], ...] = ()
+    #: The [action.gait] table: (parameter, value) pairs, sorted (tasks.gait.PARAMETERS).
+    parameters: tuple[tuple[str, float], ...] = ()
+
+    @classmethod
+    def parse(cls, fields, table, drive):
+        import math
+
+        from tasks import gait
+        motors = tuple((r, fields.text(table, r, f"action.{r}")) for r in GAIT_ROLES if r in table)
+        g = table.get("gait", {})
+        if not isinstance(g, dict):
+            fields.fail("action.gait", "must be a table")
+        for k, v in g.items():
+            if k not in gait.PARAMETERS:
+                fields.fail(f"action.gait.{k}", f"unknown key; valid: {', '.join(gait.PARAMETERS)}")
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                fields.fail(f"action.gait.{k}", f"must be a number, got {v!r}")
+        return cls(motors, tuple(sorted((k, float(v)) for k, v in g.items())))
+
+    def claimed(self):
+        return {role for role, _ in self.motors} | {k for k, _ in self.parameters}
+
+    def edit(self, mount, spec, base, names):
+        """Checks the file's 4 hips and 4 ankles the mount names, and maps them."""
+        given = dict(self.motors)
+        for role in GAIT_ROLES:
+            name = given.get(role)
+            if name is None:
+                fail(mount.path, f"action.{role}", "missing: the file's motor for it")
+            file_actuator(mount, spec, f"action.{role}", name)
+        names.update((role, name) for role, name in self.motors if role != name)
+
+    def classes(self, mount):
+        from tasks import gait
+        return Classes(gait.Gait, gait.physics_class(dict(self.parameters)))
+
+    def check_task_config(self, config):
+        from tasks import gait
+        gait.check_config(config)

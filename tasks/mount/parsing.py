@@ -1,0 +1,179 @@
+"""A mount file read into a Mount: the top table, the bumper, the beams, the action (its
+kind's own fields: tasks.mount.kinds), the readings and check tables."""
+from __future__ import annotations
+
+import importlib.util
+import pathlib
+
+from tasks.mount.fields import Fields, MountError, read
+from tasks.mount.kinds import KINDS
+from tasks.mount.records import Action, Beams, Bumper, Mount
+from tasks.mount.spec import BEAMS
+
+#: Joints of the base: its file's, a free joint added, or slide x, slide y (and, for the
+#: two-wheel drive, hinge yaw) added in place of the base's own.
+JOINTS = ("file", "free", "planar")
+#: What of the file a mount may drop: "world" the geoms of its world body (floor, walls,
+#: markers), "lights", "skybox" (its skybox textures), "cameras", "actuators", "tendons",
+#: "sensors" (all but the rangefinders the beams name).
+DROPS = ("world", "lights", "skybox", "cameras", "actuators", "tendons", "sensors")
+OPTIONS = ("timestep", "integrator", "flags")
+#: The action kinds each drive takes (every drive has a beams arrangement, BEAMS), in the
+#: kinds' registration order.
+ACTIONS = {drive: tuple(name for name, kind in KINDS.items() if drive in kind.drives)
+           for drive in BEAMS}
+
+_TOP = {"name", "description", "file", "drive", "unit", "base", "joints", "drop",
+        "drop_geoms", "drop_bodies", "keep_options", "timestep", "integrator", "time_scale",
+        "bumper", "beams", "action", "readings", "check"}
+_BUMPER = {"geom", "shape", "radius", "height", "half_length"}
+_BEAMS = {"height", "sensors"}
+_ACTION = {"kind"}.union(*(kind.keys for kind in KINDS.values()))
+
+
+def resolve_file(text: str, where: str, mount_path: pathlib.Path) -> pathlib.Path:
+    """A robot file named by a path (relative to the mount file) or by package:path."""
+    if ":" in text and not pathlib.Path(text).is_absolute() and len(text.split(":", 1)[0]) > 1:
+        package, rel = text.split(":", 1)
+        try:
+            spec = importlib.util.find_spec(package)
+        except (ImportError, ValueError):
+            spec = None
+        if spec is None or not spec.submodule_search_locations:
+            raise MountError(f"{mount_path}: {where}: package {package!r} is not installed")
+        path = pathlib.Path(next(iter(spec.submodule_search_locations))) / rel
+    else:
+        path = (mount_path.parent / text).resolve()
+    if not path.is_file():
+        raise MountError(f"{mount_path}: {where}: no robot file at {path}")
+    return path
+
+
+def parse(path: str | pathlib.Path) -> Mount:
+    """The Mount of a mount file; MountError on any bad field (the file is not compiled
+    here: `check` does that)."""
+    path = pathlib.Path(path)
+    data = read(path)
+    fields = Fields(path)
+    drive, model, joints = _parse_top(fields, data)
+    bumper = _parse_bumper(fields, data)
+    beams = _parse_beams(fields, data, drive)
+    action = _parse_action(fields, data, drive, joints)
+    readings, check = _parse_tables(fields, data, drive)
+    integrator = _parse_integrator(fields, data)
+    text, number, names = fields.text, fields.number, fields.names
+    return Mount(path=path.resolve(), name=text(data, "name", "name", path.stem),
+                 file=data["file"], model=model, drive=drive,
+                 unit=number(data, "unit", "unit", 0.1), base=text(data, "base", "base"),
+                 joints=joints, drop=names(data, "drop", "drop", DROPS),
+                 drop_geoms=names(data, "drop_geoms", "drop_geoms"),
+                 drop_bodies=names(data, "drop_bodies", "drop_bodies"),
+                 keep_options=names(data, "keep_options", "keep_options", OPTIONS),
+                 bumper=bumper, beams=beams, action=action,
+                 timestep=number(data, "timestep", "timestep"), integrator=integrator,
+                 time_scale=number(data, "time_scale", "time_scale", 1.0),
+                 readings=readings, check=check,
+                 description=str(data.get("description", "")))
+
+
+def _parse_top(fields, data):
+    """The top table's keys, its required fields, the drive, the robot file (resolved)
+    and the joints."""
+    fail = fields.fail
+    fields.table(data, _TOP, "")
+    for key in ("file", "drive", "base"):
+        if key not in data:
+            fail(key, "missing (required)")
+    drive = fields.text(data, "drive", "drive")
+    if drive not in ACTIONS:
+        fail("drive", f"unknown drive {drive!r}; valid: {', '.join(ACTIONS)}")
+    model = resolve_file(fields.text(data, "file", "file"), "file", fields.path)
+    joints = data.get("joints", "file")
+    if joints not in JOINTS:
+        fail("joints", f"must be one of {', '.join(JOINTS)}, got {joints!r}")
+    return drive, model, joints
+
+
+def _parse_bumper(fields, data) -> Bumper:
+    """The bumper: the file's geom, or a shape added."""
+    fail, number = fields.fail, fields.number
+    bumper = fields.table(data.get("bumper", {}), _BUMPER, "bumper")
+    if "geom" in bumper:
+        if set(bumper) - {"geom"}:
+            fail("bumper", "a file's geom (geom) or an added shape (shape, radius, height), not both")
+        return Bumper(geom=fields.text(bumper, "geom", "bumper.geom"))
+    if "shape" in bumper:
+        shape = bumper["shape"]
+        if shape not in ("sphere", "capsule"):
+            fail("bumper.shape", f"must be sphere or capsule, got {shape!r}")
+        if "radius" not in bumper:
+            fail("bumper.radius", "missing (required with shape)")
+        return Bumper(shape=shape, radius=number(bumper, "radius", "bumper.radius"),
+                      height=number(bumper, "height", "bumper.height", 0.0, positive=False),
+                      half_length=number(bumper, "half_length", "bumper.half_length", 0.0,
+                                         positive=False))
+    fail("bumper", "missing: geom = a geom of the file, or shape, radius, height")
+
+
+def _parse_beams(fields, data, drive) -> Beams:
+    """The beams: added at a height, or the file's rangefinders by name."""
+    fail = fields.fail
+    beams = fields.table(data.get("beams", {}), _BEAMS, "beams")
+    if "sensors" in beams:
+        if "height" in beams:
+            fail("beams", "the file's rangefinders (sensors) or added beams (height), not both")
+        listed = fields.names(beams, "sensors", "beams.sensors")
+        count = BEAMS[drive][0]
+        if len(listed) != count:
+            fail("beams.sensors", f"the {drive} drive needs {count} rangefinders, got {len(listed)}")
+        return Beams(sensors=listed)
+    if "height" in beams:
+        return Beams(height=fields.number(beams, "height", "beams.height", positive=False))
+    fail("beams", "missing: height = the added beams' height above the base (m), "
+                  "or sensors = the file's rangefinders in order")
+
+
+def _parse_action(fields, data, drive, joints) -> Action:
+    """The action: its kind's record, parsed by the kind."""
+    fail = fields.fail
+    table = fields.table(data.get("action", {}), _ACTION, "action")
+    name = table.get("kind")
+    if name not in ACTIONS[drive]:
+        fail("action.kind", f"the {drive} drive takes one of {', '.join(ACTIONS[drive])}, "
+                            f"got {name!r}")
+    action = KINDS[name].parse(fields, table, drive)
+    # (a [action.gait] table is not refused for the other kinds: it is ignored)
+    extra = set(table) - {"kind", "gait"} - action.claimed()
+    if extra:
+        fail(f"action.{sorted(extra)[0]}", f"not a field of action kind {name!r}")
+    action.check_joints(fields, joints)
+    return action
+
+
+def _parse_tables(fields, data, drive):
+    """Mount.readings and Mount.check, from the readings and check tables."""
+    fail = fields.fail
+    readings = data.get("readings", {})
+    if not isinstance(readings, dict):
+        fail("readings", "must be a table")
+    check = data.get("check", {})
+    if not isinstance(check, dict):
+        fail("check", "must be a table")
+    valid = ("turn", "move", "falls") if drive == "two_wheel" else ("velocity_x", "velocity_y")
+    for k in check:
+        if k not in valid:
+            fail(f"check.{k}", f"unknown key; valid: {', '.join(valid)}")
+        fields.number(check, k, f"check.{k}", positive=k != "falls")
+    return (tuple(sorted(readings.items())),
+            tuple(sorted((k, float(v)) for k, v in check.items())))
+
+
+def _parse_integrator(fields, data):
+    """The integrator field, one of models.INTEGRATORS, or None."""
+    integrator = data.get("integrator")
+    if integrator is not None:
+        import models
+        if integrator not in models.INTEGRATORS:
+            fields.fail("integrator", f"unknown integrator {integrator!r}; valid: "
+                                      f"{', '.join(models.INTEGRATORS)}")
+    return integrator

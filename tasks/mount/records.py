@@ -1,0 +1,108 @@
+"""A parsed mount, as named records: Mount, its Bumper and Beams, and the base of the
+action kinds' records (Action; the kinds themselves: tasks.mount.kinds)."""
+from __future__ import annotations
+
+import dataclasses
+import pathlib
+from typing import ClassVar, NamedTuple
+
+
+@dataclasses.dataclass(frozen=True)
+class Bumper:
+    """The robot's bumper: a geom of the file (geom), or a shape added to the base as the
+    geom ``hull`` (shape, radius, height, half_length; metres)."""
+    geom: str | None = None
+    shape: str | None = None        # "sphere" or "capsule"
+    radius: float = 0.0
+    height: float = 0.0             # above the base's frame
+    half_length: float = 0.0        # a capsule's
+
+
+@dataclasses.dataclass(frozen=True)
+class Beams:
+    """The beams: the drive's arrangement added at a height above the base (metres), or
+    the file's rangefinders by name, in the drive's order."""
+    height: float | None = None
+    sensors: tuple[str, ...] = ()
+
+    @property
+    def added(self) -> bool:
+        return self.height is not None
+
+
+class Classes(NamedTuple):
+    """What tasks.load builds for a mount: its Task class (None: the drive's own) and its
+    Physics class."""
+    task: type | None
+    physics: type
+
+
+@dataclasses.dataclass(frozen=True)
+class Action:
+    """How the drive's action reaches the robot: one subclass per action kind, registered
+    by name (tasks.mount.kinds.register), each a record of its [action] fields that
+    knows their parsing, its edit of the robot's MjSpec and the classes it runs on."""
+    #: The kind's name (the [action] table's kind), set by its registration.
+    name: ClassVar[str]
+    #: The drives that take it.
+    drives: ClassVar[tuple[str, ...]] = ()
+    #: The [action] keys, besides kind, an action of this kind may hold (for any drive).
+    keys: ClassVar[frozenset[str]] = frozenset()
+    #: What of the file the kind's own elements replace (added to the mount's drop).
+    drops: ClassVar[frozenset[str]] = frozenset()
+
+    @classmethod
+    def parse(cls, fields, table: dict, drive: str) -> Action:
+        """The action from its [action] table (fields: tasks.mount.fields.Fields)."""
+        return cls()
+
+    def claimed(self) -> set[str]:
+        """The [action] keys this action read (any other is not a field of its kind)."""
+        return set()
+
+    def check_joints(self, fields, joints: str) -> None:
+        """Refuses root joints (the mount's joints) the kind cannot drive."""
+
+    def check_file(self, mount: Mount, spec, drop: set[str], names: dict[str, str]) -> None:
+        """Before anything of the file is dropped: checks the file's elements the action
+        names and maps them (names: contract name -> the file's, models.NAMES_TEXT)."""
+
+    def edit(self, mount: Mount, spec, base, names: dict[str, str]) -> None:
+        """Adds the kind's actuators to the spec (base: the base body), or checks and maps
+        the file's."""
+
+    def classes(self, mount: Mount) -> Classes:
+        """The Task class, Physics class and substeps the mount runs on."""
+        raise NotImplementedError
+
+    def check_task_config(self, config) -> None:
+        """Refuses task readings (a tasks.TaskConfig) the kind cannot run: ValueError."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Mount:
+    """A parsed mount file (tasks.mount.parse)."""
+    path: pathlib.Path              # the mount file
+    name: str
+    file: str                       # the robot file as written ("package:path" or a path)
+    model: pathlib.Path             # the robot file, resolved
+    drive: str
+    unit: float
+    base: str
+    joints: str
+    drop: tuple[str, ...]
+    drop_geoms: tuple[str, ...]
+    drop_bodies: tuple[str, ...]
+    keep_options: tuple[str, ...]
+    bumper: Bumper
+    beams: Beams
+    action: Action
+    timestep: float | None = None
+    integrator: str | None = None
+    time_scale: float = 1.0
+    #: The [readings] table as sorted (field, value) pairs (Robot.readings).
+    readings: tuple[tuple[str, object], ...] = ()
+    description: str = ""
+    #: `ebrl check`'s accuracy limits where the drive's 5% is not reached, as (error,
+    #: limit) pairs ("turn" rad, "move" units, "velocity_x", "velocity_y" units/step).
+    check: tuple[tuple[str, float], ...] = ()
