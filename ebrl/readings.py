@@ -54,7 +54,8 @@ class Range:
                 return "must be positive" if self.low_open else "must be non-negative"
             return f"must be {'above' if self.low_open else 'at least'} {self.low:g}"
         if self.high is not None and (value >= self.high if self.high_open else value > self.high):
-            return f"must be {'below' if self.high_open else 'at most'} {self.high:g}{self.high_note}"
+            bound = "below" if self.high_open else "at most"
+            return f"must be {bound} {self.high:g}{self.high_note}"
         return None
 
     def text(self):
@@ -93,7 +94,8 @@ class Reading:
 
     def __post_init__(self):
         if self.scope not in ("agent", "task"):
-            raise ValueError(f"reading {self.name}: scope must be agent or task, got {self.scope!r}")
+            raise ValueError(f"reading {self.name}: scope must be agent or task, "
+                             f"got {self.scope!r}")
         if self.switch and (not self.values or self.values[0] != self.default):
             raise ValueError(f"reading {self.name}: a switch's default is its first value")
         self.check(self.default)
@@ -133,10 +135,10 @@ class Reading:
 #: The agent's readings (every reading field of ebrl.Config), in Config's field order.
 AGENT = (
     Reading("policy_threshold", "agent", Range(float), 0.0,
-            "eq 5's measure min(W, U) must exceed this for memory to act"),
+            "eq 5's measure must exceed this"),
     Reading("initial_reliability", "agent", Range(float, 0.0, 1.0), 1.0,
-            "a new memory element's reliability"),
-    Reading("initial_utility", "agent", Range(float), 0.0, "a new memory element's utility"),
+            "a new element's reliability"),
+    Reading("initial_utility", "agent", Range(float), 0.0, "a new element's utility"),
     Reading("utility_cutoff", "agent", Range(float, 0.0, 1.0), 1e-4,
             "eq 6 stops where gamma^k falls below this"),
     Reading("variance_floor", "agent", Range(float, 0.0, low_open=True), 1e-6,
@@ -144,19 +146,19 @@ AGENT = (
     # 2.1: the first element of a trial has no backward link; or the link from a trial's
     # last element to the next trial's first is kept, so eq 6 and eq 7 follow it.
     Reading("episode", "agent", ("trial", "continuing"), "trial",
-            "an episode is one trial, or one episode continues across trials"),
+            "an episode is one trial, or one continuing episode across trials"),
     # 2.2: kept, its entries advance along their forward links at the next act, as on
     # any step.
     Reading("recall_at_trial_end", "agent", ("empty", "keep"), "empty",
-            "the recall table at a trial's end: emptied, or kept (its entries advance)"),
+            "the recall table at a trial's end"),
     # eq 7: from the last memory decision's element back along its links to its episode's
     # start, or only the elements used for a memory decision in the trial.
     Reading("eq7_scope", "agent", ("to_start", "decided_only"), "to_start",
-            "eq 7 walks to the episode's start, or changes only the trial's deciding elements"),
+            "eq 7 walks to the episode's start, or changes only deciding elements"),
     # 2.1: the least reliable element (first slot on ties), or the oldest (smallest time
     # stamp).
     Reading("forgetting", "agent", ("least_reliable", "oldest"), "least_reliable",
-            "which element a full memory forgets: the least reliable, or the oldest",
+            "which element a full memory forgets",
             paper='Section 2.1: "it forgets a memory element of the lowest reliability when '
                   'there is no more room to store new experience"'),
     # eq 9: inside the dead zone the acceleration on that axis is 0, or the fallback's

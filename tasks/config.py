@@ -7,21 +7,13 @@ import math
 
 from tasks import readings
 
-#: The switches' values, the default first, as the drives' kernels read them (by index):
-#: views of the registry (tasks/readings.py, where each reading's scope, the paper's
-#: words and description live; docs/interpretation.md gives the reasons).
-#: The floating drive's bump readings ("Floating bump").
+#: The task's switches' values, the default first, as the drives' kernels read them (by
+#: index): views of the registry (tasks/readings.py: each one's scope, the paper's words,
+#: its description; docs/interpretation.md: its reason).
 BUMPS = readings.BY_NAME["bump"].values
-#: The floating drive's thrust readings ("Floating thrust").
 THRUSTS = readings.BY_NAME["thrust"].values
-#: The floating drive's velocity sensing: as measured, or through a 0-255 code like the
-#: rangefinders' ("Velocity sensing").
 VELOCITY_CODES = readings.BY_NAME["velocity_code"].values
-#: The two-wheel drive's blocked move ("Blocked move"): "stop" at contact and turn the
-#: rest, or "refuse" the move whole (undone) and turn all of it.
 BLOCKED_MOVES = readings.BY_NAME["blocked_move"].values
-#: Which way a blocked move's rest turns: the commanded turn's ("commanded", right when
-#: a = 0), or "away" from the side whose beams read nearer at the blocked pose.
 LEFTOVER_TURNS = readings.BY_NAME["leftover_turn"].values
 
 
@@ -63,7 +55,8 @@ class TaskConfig:
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
                 raise ValueError(f"{name} must be a finite number, got {v!r}")
             if v < 0 or (v == 0 and name == "sensor_range"):
-                raise ValueError(f"{name} must be {'positive' if name == 'sensor_range' else 'non-negative'}, got {v!r}")
+                sign = "positive" if name == "sensor_range" else "non-negative"
+                raise ValueError(f"{name} must be {sign}, got {v!r}")
         if not isinstance(self.start_jitter, bool):
             raise ValueError(f"start_jitter must be true or false, got {self.start_jitter!r}")
         for reading in readings.TASK:

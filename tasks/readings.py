@@ -10,7 +10,7 @@ entry), its kernel and its test. A task reading's scope is the drives it acts on
 which a robot's entry names too (Robot.avoidance).
 """
 from ebrl import readings as agent_readings
-from ebrl.readings import OPEN, Range, Reading  # noqa: F401  (the record, for task code)
+from ebrl.readings import Range, Reading
 
 #: The task's readings (every reading field of tasks.TaskConfig), in its field order.
 TASK = (
@@ -23,12 +23,12 @@ TASK = (
     # "stop": the velocity set to zero at contact; "slide": frictionless walls, the motion
     # along the wall kept; "bounce": the velocity reflected off the wall (restitution).
     Reading("bump", "task", ("grip", "stop", "slide", "bounce"), "grip",
-            "the floating robot at a wall: its bumper grips, it stops, slides or bounces",
+            "the floating robot at a wall",
             drives=("floating",)),
     Reading("radius", "task",
             Range(float, 0.0, 5.0, low_open=True, none="the robot file's",
                   high_note=" units (the corridors are 10 wide)"), None,
-            "the robot's radius in units (None: its file's, 1.5 for the paper's robots)"),
+            "the robot's radius in units (None: its file's 1.5)"),
     # The velocity change per step for a demand a in [-1, 1]: "scaled" 0.2 a (Section
     # 3.3's maximum), "demand" a itself (Section 3.3's example read literally), "clipped"
     # a clipped to [-0.2, 0.2].
@@ -52,14 +52,17 @@ TASK = (
     Reading("velocity_code", "task", ("none", "code"), "none",
             "the floating robot's velocity reading as it is, or through a 0-255 code",
             drives=("floating",)),
+    # Section 3.3's blocked move: "stop" at contact and turn the rest, or "refuse" the move
+    # whole (undone) and turn all of it; the rest turns the commanded turn's way ("commanded",
+    # right when a = 0) or "away" from the side whose beams read nearer at the blocked pose.
     Reading("blocked_move", "task", ("stop", "refuse"), "stop",
-            "a blocked two-wheel move stops at contact and turns the rest, or is refused whole",
+            "a blocked two-wheel move stops at contact, or is refused whole",
             paper='Section 3.3: "If the agent cannot move any more because of collision with '
                   'an object, the rest portion of move is transferred into the angle of turn."',
             drives=("two_wheel",)),
     Reading("leftover_turn", "task", ("commanded", "away"), "commanded",
-            "a blocked move's rest turns the commanded way (right at a = 0), or away from "
-            "the nearer side", drives=("two_wheel",)),
+            "a blocked move's rest turns the commanded way, or away from the nearer side",
+            drives=("two_wheel",)),
 )
 
 #: Every reading, the agent's then the task's.

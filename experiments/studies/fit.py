@@ -47,7 +47,7 @@ STAGES = ("table", "first-trial")
 
 @dataclasses.dataclass(frozen=True)
 class Param:
-    name: str       # a reading of the registry (tasks.readings): a field of ebrl.Config or tasks.TaskConfig
+    name: str       # a reading of the registry (tasks.readings)
     kind: str       # "choice" or "float"
     values: tuple   # the choices, or (low, high)
     scope: str      # "both" (an agent reading of every robot) or "floating" (the floating robot's)
