@@ -17,7 +17,7 @@ import ebrl
 from ebrl import readings as agent_registry
 from ebrl.baselines import AGENTS
 from experiments.studies import ablation, first_trials, fit
-from tasks import TaskConfig
+from tasks.config import TaskConfig
 from tasks import readings as registry
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
