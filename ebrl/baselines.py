@@ -40,7 +40,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ebrl.config import FALLBACK_READINGS, READINGS, check_reading
+from ebrl.config import FALLBACK_READINGS, Config, check_reading
 from ebrl.similarity import modalities
 
 __all__ = ["QTableConfig", "QTable", "MFECConfig", "MFEC", "AGENTS", "discrete_actions",
@@ -88,16 +88,21 @@ def _check_shared(cfg):
         check_reading(name, getattr(cfg, name))
 
 
-@dataclasses.dataclass(frozen=True)
-class _Fallback:
-    """Section 3.4's intrinsic behaviour, for the fallback the caller builds
-    (intrinsic.fallback_for), with ebrl.Config's fields and defaults: every learner gets
-    the same behaviour, a drive's readings of it included (tasks.robots)."""
-    intrinsic_random_rate: float = 0.2
-    random_sd: float = 0.5
-    eq9_dead_zone: str = READINGS["eq9_dead_zone"][0]
-    random_in_avoidance: str = READINGS["random_in_avoidance"][0]
-    random_demand: str = READINGS["random_demand"][0]
+def _fallback_fields():
+    """ebrl.Config's fields that the fallback is built with (Section 3.4's random share
+    and spread, then its readings, ebrl.readings' fallback=True), as Config has them:
+    name, type and default."""
+    config = {f.name: f for f in dataclasses.fields(Config)}
+    return [(n, config[n].type, dataclasses.field(default=config[n].default))
+            for n in ("intrinsic_random_rate", "random_sd") + FALLBACK_READINGS]
+
+
+#: Section 3.4's intrinsic behaviour, for the fallback the caller builds
+#: (intrinsic.fallback_for), with ebrl.Config's fields and defaults: every learner gets
+#: the same behaviour, a drive's readings of it included (tasks.robots). Made from
+#: Config's fields, so a new fallback reading reaches every learner with its entry.
+_Fallback = dataclasses.make_dataclass("_Fallback", _fallback_fields(), frozen=True,
+                                       namespace={"__module__": __name__})
 
 
 @dataclasses.dataclass(frozen=True)

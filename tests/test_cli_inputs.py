@@ -71,6 +71,14 @@ CASES = [
     (["run", "--set", "memory_size=" + BIG], "memory_size must be at most"),
     (["run", "--set", "recall_size=2000"], "must be at least recall_size"),
     (["run", "--set", "alpha=0.3", "--set", "alpha=0.4"], "more than once"),
+    # run: readings, against their registry entries (tasks.readings)
+    (["run", "--set", "bump=wobble"], "bump must be one of grip, stop, slide, bounce, got 'wobble'"),
+    (["run", "--set", "eq9_dead_zone=sideways"], "eq9_dead_zone must be one of zero, keep"),
+    (["run", "--set", "radius=0"], "radius must be positive"),
+    (["run", "--set", "radius=9"], "radius must be at most 5 units"),
+    (["run", "--set", "restitution=2"], "restitution must be at most 1"),
+    (["run", "--set", "initial_reliability=1.5"], "initial_reliability must be at most 1"),
+    (["sweep", "--param", "thrust", "--values", "scaled,rocket"], "thrust must be one of"),
     # run: output folders
     (["run", "--out", "a_file"], "not a folder"),
     (["run", "--out", "a_file/results"], "a_file is not a folder"),

@@ -88,8 +88,9 @@ def choice(valid):
 
 
 def setting_value(kinds, name, text):
-    """text as the value of the setting name (of kinds, settings.kinds()), for argparse."""
-    return argument(lambda v: validate.number(kinds[name], name, v))(text)
+    """text as the value of the setting name (of kinds, settings.kinds()), for argparse: a
+    reading's value checked against its registry entry here (settings.check)."""
+    return argument(lambda v: settings.check(name, validate.number(kinds[name], name, v)))(text)
 
 
 def override(text):

@@ -1,7 +1,9 @@
 """The settings a run can change (`--set NAME=VALUE`): every learner's config fields, then
 the task's, each with the kind of value it takes and its default, the robots' own where
-their registry entries give one. What a setting is, not how the command line checks it
-(experiments.checks.validate does that). Imports nothing heavy until asked.
+their registry entries give one; a setting that is a reading of the paper takes its kind
+and allowed values from the readings' registry (tasks.readings). What a setting is, not
+how the command line parses it (experiments.checks.validate does that). Imports nothing
+heavy until asked.
 """
 
 
@@ -14,16 +16,26 @@ def _classes():
 
 def kinds():
     """Every --set name, the learners' (ebrl.Config, the baselines') then the task's
-    (tasks.TaskConfig), with the type its value takes (a field whose default is None
-    takes a number)."""
+    (tasks.TaskConfig), with the type its value takes (a reading's from its registry
+    entry, else its default's)."""
     import dataclasses
+
+    from tasks.readings import BY_NAME
     found = {}
     for cls in _classes():
         default = cls()
         for f in dataclasses.fields(cls):
-            value = getattr(default, f.name)
-            found[f.name] = float if value is None else type(value)
+            reading = BY_NAME.get(f.name)
+            found[f.name] = reading.type if reading else type(getattr(default, f.name))
     return found
+
+
+def check(name, value):
+    """value for the setting name, or ValueError in one line where name is a reading of
+    the paper and value not among its allowed values (tasks.readings; the configs check
+    the rest, experiments.checks.validate.agent_configs)."""
+    from tasks.readings import BY_NAME
+    return BY_NAME[name].check(value) if name in BY_NAME else value
 
 
 def default(name, entries=()):

@@ -1,7 +1,8 @@
 """`ebrl ablate`: how much each reading of the paper moves each claim.
 
 Every reading with a credible alternative (docs/interpretation.md) is a field of the
-agent's config (ebrl.Config) or the task's (tasks.TaskConfig). The matrix changes one
+agent's config (ebrl.Config) or the task's (tasks.TaskConfig), with its entry in the
+readings' registry (tasks.readings: values, scope, description). The matrix changes one
 reading at a time from the defaults (and, with --combo, several together), runs the
 protocol for each cell in its own folder (resumable like `ebrl run`), and writes
 ABLATION.md and ablation.json: the Section 3.6 figures of every cell with 95% intervals,
@@ -12,46 +13,49 @@ import dataclasses
 import json
 import pathlib
 
-from ebrl.config import READINGS as AGENT_READINGS
 from experiments import paper
 from experiments.outputs import report
 from experiments.running import results, runner
-from tasks.config import BLOCKED_MOVES, BUMPS, LEFTOVER_TURNS
+from tasks import readings as registry
 
 
 @dataclasses.dataclass(frozen=True)
-class Reading:
-    name: str              # a field of ebrl.Config or tasks.TaskConfig
+class Ablated:
+    """A reading of the registry (tasks.readings) and the values the ablation tries."""
+    reading: object        # tasks.readings' record: its scope and description
     values: tuple          # the config field's default first (a robot's may be another)
-    drives: tuple = ()     # the drives it concerns (all when empty)
-    conditions: tuple = ()  # the conditions it concerns (all when empty)
-    what: str = ""
+
+    @property
+    def name(self):
+        return self.reading.name
+
+    @property
+    def what(self):
+        return self.reading.what
 
 
-#: The switches' values come from where they are defined (ebrl.config.READINGS,
-#: tasks.config.BUMPS, BLOCKED_MOVES, LEFTOVER_TURNS); the numbers tried for the numeric ones are the ablation's own.
+def _ablated(name, values=None):
+    """A switch tries every value of its registry entry; a number the values given here."""
+    reading = registry.BY_NAME[name]
+    return Ablated(reading, reading.values if reading.switch else values)
+
+
+#: The readings ablated, in the matrix's order. The numbers tried for the numeric ones
+#: are the ablation's own; everything else comes from the registry.
 READINGS = (
-    Reading("bump", BUMPS, drives=("floating",),
-            what="the floating robot at a wall"),
-    Reading("eq9_dead_zone", AGENT_READINGS["eq9_dead_zone"], drives=("floating",), conditions=("avoidance",),
-            what="eq 9's 'not changed': zero acceleration, or the previous one kept"),
-    Reading("random_in_avoidance", AGENT_READINGS["random_in_avoidance"], conditions=("avoidance",),
-            what="the 20% random action replaces, or is added to, the avoidance action"),
-    Reading("random_demand", AGENT_READINGS["random_demand"],
-            what="a random action's demand: Gaussian, or uniform for the walk or for all"),
-    Reading("blocked_move", BLOCKED_MOVES, drives=("two_wheel",),
-            what="a blocked two-wheel move stops at contact, or is refused whole"),
-    Reading("leftover_turn", LEFTOVER_TURNS, drives=("two_wheel",),
-            what="a blocked move's rest turns the commanded way, or away from the nearer side"),
-    Reading("episode", AGENT_READINGS["episode"],
-            what="an episode is one trial, or one continuing episode across trials"),
-    Reading("recall_at_trial_end", AGENT_READINGS["recall_at_trial_end"], what="the recall table at a trial's end"),
-    Reading("initial_reliability", (1.0, 0.5, 0.0), what="a new element's reliability"),
-    Reading("eq7_scope", AGENT_READINGS["eq7_scope"],
-            what="eq 7 walks to the episode's start, or changes only deciding elements"),
-    Reading("forgetting", AGENT_READINGS["forgetting"], what="which element a full memory forgets"),
-    Reading("radius", (None, 1.0, 2.5), what="the robot's radius in units (None: its file's 1.5)"),
-    Reading("policy_threshold", (0.0, 0.05, 0.2), what="eq 5's measure must exceed this"),
+    _ablated("bump"),
+    _ablated("eq9_dead_zone"),
+    _ablated("random_in_avoidance"),
+    _ablated("random_demand"),
+    _ablated("blocked_move"),
+    _ablated("leftover_turn"),
+    _ablated("episode"),
+    _ablated("recall_at_trial_end"),
+    _ablated("initial_reliability", (1.0, 0.5, 0.0)),
+    _ablated("eq7_scope"),
+    _ablated("forgetting"),
+    _ablated("radius", (None, 1.0, 2.5)),
+    _ablated("policy_threshold", (0.0, 0.05, 0.2)),
 )
 BY_NAME = {r.name: r for r in READINGS}
 DEFAULT = "default"
@@ -79,14 +83,12 @@ def _is_default(changes, robot):
 
 
 def _concerns(changes, robot, condition):
-    """Whether a cell's changes touch this robot's drive and this condition."""
+    """Whether every ablated reading a cell changes acts on this robot (its drive, its
+    fallback behaviour) and this condition (the registry's scope, tasks.readings.applies)."""
     from tasks.robots import resolve
-    drive = resolve(robot).drive
-    for name, _ in changes:
-        r = BY_NAME.get(name)
-        if r and ((r.drives and drive not in r.drives) or (r.conditions and condition not in r.conditions)):
-            return False
-    return True
+    entry = resolve(robot)
+    return all(registry.applies(BY_NAME[name].reading, entry, condition)
+               for name, _ in changes if name in BY_NAME)
 
 
 def plan(robots, seeds, steps, readings, combos):

@@ -21,11 +21,9 @@ import pathlib
 
 import numpy as np
 
-from ebrl.config import READINGS as AGENT_READINGS
 from experiments import paper
 from experiments.running import results, runner
 from experiments.studies import study
-from tasks.config import BLOCKED_MOVES, BUMPS, LEFTOVER_TURNS
 
 STAGE = "first-trial"
 #: The kurtosis the sd's standard error assumes: an exponential's (9), which the paper's
@@ -39,38 +37,29 @@ ROBOTS = {"two_wheel": "two_wheel", "floating": "floating"}
 MIN_SEEDS = 64
 
 
-def _param(name, kind, values, what):
-    """A reading of the space, as `ebrl fit`'s (fit.Param; its scope: the drive's alone)."""
-    from experiments.studies.fit import Param
-    return Param(name, kind, values, "drive", what)
+def _param(name, bounds=None):
+    """A reading of the registry in a drive's space (fit.param; its scope: the drive's
+    alone), a number within bounds (low, high), this stage's choice."""
+    from experiments.studies.fit import param
+    return param(name, bounds, scope="drive")
 
 
-def _switch(name, what):
-    return _param(name, "choice", AGENT_READINGS[name], what)
-
-
-_FALLBACK = (
-    _switch("random_demand", "the random action: Gaussian sd 0.5, or uniform over (-1, 1) "
-                             "for the walk or for every random action"),
-    _switch("random_in_avoidance", "the 20% random action replaces or is added"),
-)
+_FALLBACK = (_param("random_demand"), _param("random_in_avoidance"))
 #: The search space of each drive (the radius from a body that still carries its sensors
 #: to the ablation's largest, as `ebrl fit`'s).
 SPACES = {
     "two_wheel": _FALLBACK + (
-        _param("blocked_move", "choice", BLOCKED_MOVES, "a blocked move stops at contact, or "
-                                                       "is refused whole"),
-        _param("leftover_turn", "choice", LEFTOVER_TURNS, "the rest turns the commanded way, "
-                                                         "or away from the nearer side"),
-        _param("radius", "float", (1.0, 2.5), "the robot's radius, units"),
+        _param("blocked_move"),
+        _param("leftover_turn"),
+        _param("radius", (1.0, 2.5)),
     ),
     "floating": _FALLBACK + (
-        _switch("eq9_dead_zone", "eq 9's 'not changed': kept, or zero"),
-        _param("bump", "choice", BUMPS, "the floating robot at a wall"),
-        _param("restitution", "float", (0.0, 1.0), "the share reflected (with bounce)"),
-        _param("wall_friction", "float", (0.0, 1.5), "the bumper's friction (with grip)"),
-        _param("action_noise", "float", (0.0, 0.5), "the floating drive's action noise"),
-        _param("radius", "float", (1.0, 2.5), "the robot's radius, units"),
+        _param("eq9_dead_zone"),
+        _param("bump"),
+        _param("restitution", (0.0, 1.0)),
+        _param("wall_friction", (0.0, 1.5)),
+        _param("action_noise", (0.0, 0.5)),
+        _param("radius", (1.0, 2.5)),
     ),
 }
 

@@ -1,8 +1,9 @@
 """`ebrl fit`: a search over the readings the paper leaves open, against its Section 3.6 table.
 
-The space (SPACE) is every switch of ebrl.config.READINGS and tasks.config's readings,
-plus the continuous readings the paper leaves open; Table 1, the room, the rangefinders
-(range 14, noise sd 12.75, 7 and 8 of them) and the actions' maxima stay fixed. A reading
+The space (SPACE) is readings of the registry (tasks.readings: their values and
+descriptions), switches and the continuous readings the paper leaves open, the latter
+within bounds chosen here; Table 1, the room, the rangefinders (range 14, noise sd
+12.75, 7 and 8 of them) and the actions' maxima stay fixed. A reading
 of the agent (ebrl.Config) is shared by both robots; a reading of the floating drive
 applies to the floating robot only, so the two-wheel runs of two trials that differ only
 there are the same runs (made once; experiments.studies.study).
@@ -27,12 +28,11 @@ import json
 import math
 import pathlib
 
-from ebrl.config import READINGS as AGENT_READINGS
 from experiments import paper
 from experiments.outputs import report
 from experiments.running import results
 from experiments.studies import study
-from tasks.config import BUMPS, THRUSTS, VELOCITY_CODES
+from tasks import readings as registry
 
 STUDY_NAME = "fit"
 #: The robots of a trial: the floating robot searched, the two-wheel robot its constraint.
@@ -47,10 +47,10 @@ STAGES = ("table", "first-trial")
 
 @dataclasses.dataclass(frozen=True)
 class Param:
-    name: str       # a field of ebrl.Config or tasks.TaskConfig
+    name: str       # a reading of the registry (tasks.readings)
     kind: str       # "choice" or "float"
     values: tuple   # the choices, or (low, high)
-    scope: str      # "both" (an agent reading) or "floating" (the floating drive's)
+    scope: str      # "both" (an agent reading of every robot) or "floating" (the floating robot's)
     what: str
 
     def distribution(self):
@@ -60,8 +60,19 @@ class Param:
         return optuna.distributions.FloatDistribution(*self.values)
 
 
-def _switch(name, scope="both", what=""):
-    return Param(name, "choice", AGENT_READINGS[name], scope, what)
+def param(name, bounds=None, scope=None):
+    """A reading of the registry as a dimension of a space: a switch's every value, or a
+    number searched within bounds (low, high), the study's own choice. The scope, unless
+    given: "both" for an agent reading that acts on every robot; the floating robot's
+    alone for the rest (the task's readings, and eq9_dead_zone's eq 9-10 fallback): the
+    floating robot is searched, the two-wheel robot is the constraint."""
+    reading = registry.BY_NAME[name]
+    if scope is None:
+        scope = "both" if reading.scope == "agent" and not (reading.drives or reading.behaviours) \
+            else "floating"
+    if reading.switch:
+        return Param(name, "choice", reading.values, scope, reading.what)
+    return Param(name, "float", bounds, scope, reading.what)
 
 
 #: The search space. The ranges: policy_threshold up to 0.5 (0.3-0.4 moved the floating
@@ -69,22 +80,22 @@ def _switch(name, scope="both", what=""):
 #: smallest credible size to the ablation's largest; action noise up to 50% (the paper
 #: gives the floating robot none); velocity noise up to 0.2 units/step (one full thrust).
 SPACE = (
-    _switch("episode", what="an episode is one trial, or continues across trials"),
-    _switch("recall_at_trial_end", what="the recall table at a trial's end"),
-    _switch("eq7_scope", what="eq 7 to the episode's start, or deciding elements only"),
-    _switch("forgetting", what="which element a full memory forgets"),
-    _switch("random_in_avoidance", what="the 20% random action replaces or is added"),
-    _switch("eq9_dead_zone", "floating", "eq 9's 'not changed': kept, or zero"),
-    Param("policy_threshold", "float", (0.0, 0.5), "both", "eq 5's measure must exceed this"),
-    Param("initial_reliability", "float", (0.0, 1.0), "both", "a new element's reliability"),
-    Param("bump", "choice", BUMPS, "floating", "the floating robot at a wall"),
-    Param("thrust", "choice", THRUSTS, "floating", "the velocity change for a demand"),
-    Param("action_noise", "float", (0.0, 0.5), "floating", "the floating drive's action noise"),
-    Param("velocity_noise", "float", (0.0, 0.2), "floating", "velocity reading noise, units/step"),
-    Param("velocity_code", "choice", VELOCITY_CODES, "floating", "velocity as is, or 0-255 coded"),
-    Param("wall_friction", "float", (0.0, 1.5), "floating", "the bumper's friction (with grip)"),
-    Param("restitution", "float", (0.0, 1.0), "floating", "the share reflected (with bounce)"),
-    Param("radius", "float", (1.0, 2.5), "floating", "the floating robot's radius, units"),
+    param("episode"),
+    param("recall_at_trial_end"),
+    param("eq7_scope"),
+    param("forgetting"),
+    param("random_in_avoidance"),
+    param("eq9_dead_zone"),
+    param("policy_threshold", (0.0, 0.5)),
+    param("initial_reliability", (0.0, 1.0)),
+    param("bump"),
+    param("thrust"),
+    param("action_noise", (0.0, 0.5)),
+    param("velocity_noise", (0.0, 0.2)),
+    param("velocity_code"),
+    param("wall_friction", (0.0, 1.5)),
+    param("restitution", (0.0, 1.0)),
+    param("radius", (1.0, 2.5)),
 )
 BY_NAME = {p.name: p for p in SPACE}
 

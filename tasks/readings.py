@@ -1,0 +1,78 @@
+"""The task's readings of the paper, one record each (ebrl.readings.Reading, the agent's
+record), and every reading of both for the commands (EVERY, BY_NAME, applies).
+
+tasks.TaskConfig takes its reading fields' defaults from TASK and checks them with
+Reading.check; tasks.config's BUMPS, THRUSTS, VELOCITY_CODES, BLOCKED_MOVES and
+LEFTOVER_TURNS (which the drives' kernels read by index) are these switches' values.
+A new task reading is an entry here, the TaskConfig field of its name (default from its
+entry), its kernel and its test. A task reading's scope is the drives it acts on
+(tasks.robots.DRIVES; all when empty); the agent's are scoped by fallback behaviour,
+which a robot's entry names too (Robot.avoidance).
+"""
+from ebrl import readings as agent_readings
+from ebrl.readings import Range, Reading
+
+#: The task's readings (every reading field of tasks.TaskConfig), in its field order.
+TASK = (
+    Reading("action_noise", "task", Range(float, 0.0, 1.0, high_open=True), 0.05,
+            "each action part scaled by a factor drawn uniformly from [1 - n, 1]",
+            paper='Section 3.3: "the action also includes some amount of fluctuation by '
+                  'maximum 5% discount from demanded value in both turning angle and moving '
+                  'length" (the two wheels robot; the floating robot\'s is open)'),
+    # "grip": the bumper's friction takes the motion into the wall and most along it;
+    # "stop": the velocity set to zero at contact; "slide": frictionless walls, the motion
+    # along the wall kept; "bounce": the velocity reflected off the wall (restitution).
+    Reading("bump", "task", ("grip", "stop", "slide", "bounce"), "grip",
+            "the floating robot at a wall",
+            drives=("floating",)),
+    Reading("radius", "task",
+            Range(float, 0.0, 5.0, low_open=True, none="the robot file's",
+                  high_note=" units (the corridors are 10 wide)"), None,
+            "the robot's radius in units (None: its file's 1.5)"),
+    # The velocity change per step for a demand a in [-1, 1]: "scaled" 0.2 a (Section
+    # 3.3's maximum), "demand" a itself (Section 3.3's example read literally), "clipped"
+    # a clipped to [-0.2, 0.2].
+    Reading("thrust", "task", ("scaled", "demand", "clipped"), "scaled",
+            "the floating robot's velocity change for a demand a: 0.2 a, a, or a clipped",
+            paper='Section 3.3: "We set the maximum value of acceleration as 0.2 units per '
+                  'square step."',
+            drives=("floating",)),
+    Reading("wall_friction", "task", Range(float, 0.0, none="the robot file's, 1"), None,
+            "the floating bumper's sliding friction on the walls (acts with bump=grip)",
+            drives=("floating",)),
+    # 0: the motion into the wall stops, the motion along it is kept.
+    Reading("restitution", "task", Range(float, 0.0, 1.0), 1.0,
+            "the share of the speed into a wall that bump=bounce reflects (1: elastic)",
+            drives=("floating",)),
+    Reading("velocity_noise", "task", Range(float, 0.0), 0.0,
+            "the sd of the Gaussian noise on the floating robot's velocity reading, units/step",
+            drives=("floating",)),
+    # "code": the 0-255 code of the velocity over +-VELOCITY_FULL_SCALE, decoded back to
+    # units/step, as the rangefinders' readings are coded.
+    Reading("velocity_code", "task", ("none", "code"), "none",
+            "the floating robot's velocity reading as it is, or through a 0-255 code",
+            drives=("floating",)),
+    # Section 3.3's blocked move: "stop" at contact and turn the rest, or "refuse" the move
+    # whole (undone) and turn all of it; the rest turns the commanded turn's way ("commanded",
+    # right when a = 0) or "away" from the side whose beams read nearer at the blocked pose.
+    Reading("blocked_move", "task", ("stop", "refuse"), "stop",
+            "a blocked two-wheel move stops at contact, or is refused whole",
+            paper='Section 3.3: "If the agent cannot move any more because of collision with '
+                  'an object, the rest portion of move is transferred into the angle of turn."',
+            drives=("two_wheel",)),
+    Reading("leftover_turn", "task", ("commanded", "away"), "commanded",
+            "a blocked move's rest turns the commanded way, or away from the nearer side",
+            drives=("two_wheel",)),
+)
+
+#: Every reading, the agent's then the task's.
+EVERY = agent_readings.AGENT + TASK
+BY_NAME = {r.name: r for r in EVERY}
+
+
+def applies(reading, robot, condition=None):
+    """Whether a reading acts on a robot (its tasks.robots entry: its drive and its
+    fallback behaviour) and, given one, a condition."""
+    return ((not reading.drives or robot.drive in reading.drives)
+            and (not reading.behaviours or robot.avoidance in reading.behaviours)
+            and (condition is None or not reading.conditions or condition in reading.conditions))
