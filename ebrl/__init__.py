@@ -78,7 +78,6 @@ tests/test_baselines.py; baselines.AGENTS names them): QTable, tabular Q-learnin
 roulette-wheel selection, whose confidence is the variance of its action probabilities;
 MFEC, model-free episodic control, trusted where its nearest neighbours are near.
 """
-from ebrl import compiled  # noqa: F401  first: numba's cache then knows what a kernel compiles in
 from ebrl import baselines, behaviour, intrinsic
 from ebrl.agent import Agent
 from ebrl.config import Config, paper_config

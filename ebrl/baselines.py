@@ -40,6 +40,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl.config import FALLBACK_READINGS, Config, check_reading
 from ebrl.similarity import modalities
 

@@ -8,13 +8,44 @@ loop (experiments.running.fused.run) compiles in the agent's and the tasks' kern
 an edit of eq 6 in ebrl/kernels.py would leave the cached loop running the old eq 6,
 silently, on every later run.
 
-Importing this module (ebrl and tasks do, before their kernels) puts in front of
-numba's cache locators one that adds to a file's own stamp the content of every file its
-module reaches through its globals (modules, compiled functions, other functions and
-classes), transitively, among the modules that live outside the Python installation
-(this checkout's, installed in place). An edit of any of them recompiles the kernels
-that may depend on it, once, on the next run; the cache stays where numba puts it
-(`__pycache__` beside the file, or NUMBA_CACHE_DIR). It changes no compiled code.
+Importing this module puts in front of numba's cache locators one that adds to a file's
+own stamp the content of every file its module reaches through its globals (modules,
+compiled functions, other functions and classes), transitively, among the modules that
+live outside the Python installation (this checkout's, installed in place). An edit of any
+of them recompiles the kernels that may depend on it, once, on the next run; the cache
+stays where numba puts it (`__pycache__` beside the file, or NUMBA_CACHE_DIR). It changes
+no compiled code.
+
+The rule: every module that defines a cached kernel imports this module in its own
+import block, ``from ebrl import compiled  # noqa: F401  numba's cache keyed on ...``,
+so the locators are in place before its first decoration whatever was imported before
+it, and the imports sort as any others. (`compiled` is then in the module's globals: an
+edit of this file recompiles the kernels, as it should.)
+tests/test_compiled.py checks the rule over the checkout and, in a fresh process per
+module, that each module's cached kernels are keyed here (covers()).
+
+numba has no public form of this that holds here (below), so its private names are read
+in this module and nowhere else (checked on numba 0.68.1; the CacheImpl/_CacheImpl
+fallback follows numba's rename in 0.62, read in numba's source, not run here):
+- ``numba.core.caching.CacheImpl._locator_classes`` (``_CacheImpl`` before 0.62): the
+  list of locator classes numba tries, first to last, when a kernel is decorated; the
+  two below are put first. (numba.config.CACHE_LOCATOR_CLASSES, the environment's
+  NUMBA_CACHE_LOCATOR_CLASSES, names the same list publicly in numba 0.68.1, a recent
+  addition not checked on the older numba pyproject.toml allows (0.60 on); numba resets
+  the config value from the environment whenever a NUMBA_* variable changes, which would
+  turn the keying off silently; and as an environment variable it reaches every child
+  process, one without this checkout on its path included, whose first cached kernel
+  then fails. Not used.)
+- ``numba.core.caching.UserProvidedCacheLocator`` and ``InTreeCacheLocator`` (numba's
+  NUMBA_CACHE_DIR and ``__pycache__`` locators), subclassed with numba's locator
+  protocol, ``from_function(py_func, py_file)`` and ``get_source_stamp()``.
+- in covers() only: ``Dispatcher._cache`` and its ``_impl``, numba's cache of a kernel
+  and the CacheImpl that holds the locator it chose.
+The public alternative measured (docs/speed.md): a NUMBA_CACHE_DIR named by the content
+of all of ebrl/, tasks/ and experiments/ recompiles every kernel after any edit (21-22 s
+here, against 2-10 s for what depends on the edited file, and nothing for a file no
+kernel reaches), must be set before the first decoration as well, and displaces a user's
+own NUMBA_CACHE_DIR.
 """
 import functools
 import hashlib
@@ -93,7 +124,7 @@ class _Dependent:
     """A locator mixin: numba's stamp of the function's file, then dependency_stamp."""
 
     def get_source_stamp(self):
-        return super().get_source_stamp(), dependency_stamp(self._namespace, self._py_file)
+        return super().get_source_stamp(), dependency_stamp(self.ebrl_namespace, self.ebrl_file)
 
     @classmethod
     def from_function(cls, py_func, py_file):
@@ -101,7 +132,7 @@ class _Dependent:
             return None
         self = super().from_function(py_func, py_file)
         if self is not None:
-            self._namespace = py_func.__globals__
+            self.ebrl_namespace, self.ebrl_file = py_func.__globals__, py_file
         return self
 
 
@@ -115,11 +146,17 @@ class InTreeLocator(_Dependent, caching.InTreeCacheLocator):
 
 def install():
     """Puts the two locators first among numba's (once per process)."""
-    impl = getattr(caching, "CacheImpl", None) or caching._CacheImpl  # numba < 0.62: private
+    impl = getattr(caching, "CacheImpl", None) or caching._CacheImpl  # numba < 0.62
     classes = impl._locator_classes
     for cls in (InTreeLocator, UserDirLocator):  # UserDirLocator ends up first
         if cls not in classes:
             classes.insert(0, cls)
+
+
+def covers(dispatcher):
+    """Whether a cached kernel's cache is keyed here (its locator one of this module's)."""
+    impl = getattr(getattr(dispatcher, "_cache", None), "_impl", None)
+    return isinstance(getattr(impl, "locator", None), _Dependent)
 
 
 install()

@@ -19,6 +19,7 @@ from llvmlite import binding
 from numba import njit, types
 from numba.experimental import structref
 
+from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl.config import READINGS, check_reading
 from ebrl.kernels import INTRINSIC, RANDOM
 

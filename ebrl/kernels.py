@@ -31,6 +31,8 @@ import numpy as np
 from numba import njit, types
 from numba.experimental import structref
 
+from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+
 INVALID = -2  # act's answer for an observation that is not finite or whose square overflows
 FALLBACK = -1  # act_memory's answer when the fallback is to choose the action
 #: Who chose an action: the memory (eq 5); the fallback's intrinsic behaviour or its

@@ -7,16 +7,15 @@ import dataclasses
 
 import models  # first: it imports MuJoCo and dm_control with rendering off (tasks.render)
 
-import ebrl.compiled  # noqa: E402,F401  before the kernels: numba's cache knows what each compiles in
-import dm_env  # noqa: E402
-import mujoco  # noqa: E402
-import numpy as np  # noqa: E402
-from dm_control.mujoco import wrapper  # noqa: E402
-from dm_control.rl import control  # noqa: E402
+import dm_env
+import mujoco
+import numpy as np
+from dm_control.mujoco import wrapper
+from dm_control.rl import control
 
-from tasks import floating, navigation, render, two_wheel  # noqa: E402
-from tasks.config import TaskConfig  # noqa: E402
-from tasks.robots import DRIVES, MOUNTS, PAPER_ROBOTS, ROBOTS, Robot, resolve  # noqa: E402
+from tasks import floating, navigation, render, two_wheel
+from tasks.config import TaskConfig
+from tasks.robots import DRIVES, MOUNTS, PAPER_ROBOTS, ROBOTS, Robot, resolve
 
 __all__ = ["load", "compile_robot", "TaskConfig", "ROBOTS", "MOUNTS", "PAPER_ROBOTS", "DRIVES", "Robot",
            "resolve"]

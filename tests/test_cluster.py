@@ -181,9 +181,11 @@ def test_no_password_in_any_output_of_a_study(postgres_url, tmp_path):
     proc = start(args, out, url)
     stdout, stderr = finish(proc)
     assert "postgres:***@" in stdout
+    from experiments.studies import study
     s = load(postgres_url, "fit")
+    o = study.opened(s)
     stored = json.dumps([[t.user_attrs, t.system_attrs] for t in s.trials]
-                        + [s.user_attrs, s._storage.get_study_system_attrs(s._study_id)])
+                        + [s.user_attrs, o.storage.get_study_system_attrs(o.study_id)])
     files = [p.read_bytes() for p in out.rglob("*") if p.is_file()]
     for text in [stdout, stderr, stored] + files:
         assert SECRET not in (text.decode(errors="replace") if isinstance(text, bytes) else text)

@@ -24,6 +24,7 @@ import numpy as np
 from numba import njit, types
 from numba.experimental import structref
 
+from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl import kernels as agent_kernels
 from ebrl.agent import act_step, invalid_observation, trial_end
 from tasks.kernels import bindings, body

@@ -30,8 +30,11 @@ trial whose runs failed is marked failed (not scored) with the errors in its att
 Several workers (the same command on several machines, one storage URL, PostgreSQL say)
 share a study. Each records who runs a trial (host and process) and a heartbeat every
 HEARTBEAT seconds while it runs; a trial left running is taken as dead, and asked again,
-when its process is gone from this machine, its heartbeat is older than GRACE seconds (a
-machine that died), or no worker claimed it (one killed between asking and claiming). The steps that must not interleave (making the storage's tables,
+when its process is gone from this machine or no worker claimed it (one killed between
+asking and claiming): failed, marked INTERRUPTED; or when its heartbeat is older than GRACE
+seconds (a machine that died): failed by Optuna's own heartbeat check
+(optuna.storages.fail_stale_trials, RDBStorage's heartbeat_stale_trial_callback). The
+steps that must not interleave (making the storage's tables,
 the first trial, rescuing, asking a batch) run under one lock: a PostgreSQL advisory lock,
 or a file lock beside an SQLite file. A worker asks no more trials than the study lacks
 beside those the others run, and waits for theirs before it ends; a problem with its own
@@ -41,6 +44,13 @@ so that a generation is asked whole, by one worker, from the trials before it.
 A storage that fails while a study runs (a lost database connection) is StorageError: one
 line, the finished trials kept, the same command resumes. A URL is shown with its password
 hidden (shown()); keep it out of the command line with libpq's ~/.pgpass or PGPASSWORD.
+
+Optuna through its public API only (checked on Optuna 5.0.0): its Study, and the
+RDBStorage this module makes and keeps in its own Opened record beside the Study (found
+with opened(study); nothing is added to Optuna's objects): trial ids from
+get_trial_id_from_study_id_trial_number, the trials as stored from get_all_trials, trial
+attributes from set_trial_user_attr and set_trial_system_attr, heartbeats from
+record_heartbeat, stale ones failed by fail_stale_trials.
 """
 import contextlib
 import dataclasses
@@ -53,8 +63,15 @@ import socket
 import threading
 import time
 import warnings
+import weakref
+from typing import TYPE_CHECKING
 
 from experiments.running import results, runner
+
+if TYPE_CHECKING:  # annotations only: Optuna is imported where it is used
+    from collections.abc import Callable
+
+    import optuna
 
 #: The storage used when none is given: an SQLite file in the study's folder.
 DEFAULT_STORAGE = "study.db"
@@ -191,13 +208,42 @@ def _storage_failures():
     return tuple(kinds)
 
 
+@dataclasses.dataclass(eq=False)
+class Opened:
+    """What load() knows of a study beside Optuna's Study: its storage URL, the RDBStorage
+    it opened (the one the Study reads, through Optuna's cache of finished trials), the
+    study's id in it, and the sampler of a batch that starts when the study holds n trials
+    (None: the study keeps its sampler)."""
+    url: str
+    storage: "optuna.storages.RDBStorage"
+    study_id: int
+    reseed: "Callable[[int], optuna.samplers.BaseSampler] | None" = None
+
+    def trial_id(self, trial):
+        """The storage's id of a trial (a Trial or a FrozenTrial) of this study."""
+        return self.storage.get_trial_id_from_study_id_trial_number(self.study_id, trial.number)
+
+
+#: Each Study load() made -> its Opened (no attribute is added to Optuna's objects).
+_OPENED = weakref.WeakKeyDictionary()
+
+
+def opened(study):
+    """The Opened record of a Study made by load(); ValueError for any other Study."""
+    try:
+        return _OPENED[study]
+    except (KeyError, TypeError):
+        raise ValueError(f"study {getattr(study, 'study_name', study)!r} was not opened by "
+                         "experiments.studies.study.load") from None
+
+
 @contextlib.contextmanager
 def storage_errors(study):
     """A storage failure inside the block as StorageError (one line, password hidden)."""
     try:
         yield
     except _storage_failures() as e:
-        url = getattr(study, "ebrl_url", "")
+        url = _OPENED[study].url if study in _OPENED else ""
         raise StorageError(hide(f"lost the study storage {shown(url)}: "
                                 f"{results.error_line(e)}; the finished trials are kept: "
                                 "rerun the same command to resume", url)) from None
@@ -229,8 +275,8 @@ def load(name, storage, out, seed=0, create=True, sampler=None, first=None):
             raise ModuleNotFoundError(f"no PostgreSQL driver ({e.name}): install the "
                                       "cluster extra, pip install -e '.[cluster]'") from None
         raise
-    s.ebrl_url, s.ebrl_rdb = url, rdb
-    s.ebrl_sampler = (lambda n: tpe(seed, n)) if reseeded else None
+    _OPENED[s] = Opened(url, rdb, rdb.get_study_id_from_name(s.study_name),
+                        (lambda n: tpe(seed, n)) if reseeded else None)
     return s
 
 
@@ -244,26 +290,38 @@ def tpe(seed, n_trials):
                                       n_startup_trials=20)
 
 
+def _ask_again(study, trial):
+    """A trial failed by its stale heartbeat (fail_stale_trials): its settings asked again."""
+    study.enqueue_trial(trial.params, skip_if_exists=False)
+
+
 def _rdb(url, tries=5):
-    """Optuna's storage at url, its tables made if missing, with heartbeats. Making the
-    tables is retried: a program that opens the storage without the lock (Optuna's own
-    tools) may make them at the same moment (a unique violation on PostgreSQL's catalog)."""
+    """Optuna's storage at url, its tables made if missing, with heartbeats, a trial whose
+    heartbeat went stale asked again (_ask_again). Making the tables is retried: a program
+    that opens the storage without the lock (Optuna's own tools) may make them at the same
+    moment (a unique violation on PostgreSQL's catalog)."""
+    import inspect
+
     import optuna
     import sqlalchemy.exc
+    # Optuna 4.9 renamed failed_trial_callback (removed in 6.0) heartbeat_stale_trial_callback.
+    stale = "heartbeat_stale_trial_callback"
+    if stale not in inspect.signature(optuna.storages.RDBStorage).parameters:
+        stale = "failed_trial_callback"
     for attempt in range(tries):
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
                 return optuna.storages.RDBStorage(
                     url, heartbeat_interval=HEARTBEAT, grace_period=GRACE,
-                    engine_kwargs={"pool_pre_ping": True})
+                    engine_kwargs={"pool_pre_ping": True}, **{stale: _ask_again})
         except (sqlalchemy.exc.IntegrityError, sqlalchemy.exc.ProgrammingError):
             if attempt + 1 == tries:
                 raise
             time.sleep(0.2 * (attempt + 1))
 
 
-def _host():
+def machine():
     """This machine: its name and boot (a process id means something only on it)."""
     try:
         boot = pathlib.Path("/proc/sys/kernel/random/boot_id").read_text().strip()
@@ -282,12 +340,10 @@ def _alive(pid):
     return True
 
 
-def _dead(study, t, stale, host):
-    """Whether a running trial's worker is gone: its process gone from this machine, or
-    its heartbeat (or, without one, its start) older than GRACE seconds."""
+def _dead(t, host):
+    """Whether a running trial's worker is gone as this machine can tell: its process gone
+    from this machine, or no worker claimed it."""
     who = t.system_attrs.get(WORKER)
-    if t._trial_id in stale:
-        return True
     if who and who.get("host") == host:
         return who.get("pid") != os.getpid() and not _alive(who.get("pid"))
     # Unclaimed: its worker died between asking and claiming it under the lock (or it was
@@ -295,57 +351,54 @@ def _dead(study, t, stale, host):
     return not who
 
 
-def _rescue(study):
+def rescue(study):
     """Trials whose worker is gone (a kill, a lost machine): failed, and their settings
-    enqueued again. Call under the lock."""
+    enqueued again; the numbers of those failed here (those of a machine that died are
+    failed by their stale heartbeat, in Optuna's fail_stale_trials). Call under the lock."""
     import optuna
-    rdb = getattr(study, "ebrl_rdb", None)
-    stale = set(rdb._get_stale_trial_ids(study._study_id)) if rdb is not None else set()
-    host = _host()
-    running = _now(study, (optuna.trial.TrialState.RUNNING,))
-    dead = [t for t in running if _dead(study, t, stale, host)]
+    o = opened(study)
+    host = machine()
+    dead = [t for t in _now(study, (optuna.trial.TrialState.RUNNING,)) if _dead(t, host)]
     for t in dead:
-        # Optuna has no public way to mark a trial another process started: its storage,
-        # study and trial ids and its stale-trial query (private in Optuna's API) are the
-        # only handle.
-        study._storage.set_trial_user_attr(t._trial_id, "error", INTERRUPTED)
+        o.storage.set_trial_user_attr(o.trial_id(t), "error", INTERRUPTED)
         study.tell(t.number, state=optuna.trial.TrialState.FAIL)
         study.enqueue_trial(t.params, skip_if_exists=False)
-    return len(dead)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+        optuna.storages.fail_stale_trials(study)  # their settings: _ask_again
+    return [t.number for t in dead]
 
 
 def _claim(study, trials):
     """Records this worker (host and process) and a first heartbeat for each trial."""
-    rdb = getattr(study, "ebrl_rdb", None)
-    me = {"host": _host(), "pid": os.getpid()}
-    for t in trials:
-        study._storage.set_trial_system_attr(t._trial_id, WORKER, me)
-        if rdb is not None:
-            rdb.record_heartbeat(t._trial_id)
+    o = opened(study)
+    me = {"host": machine(), "pid": os.getpid()}
+    for trial_id in map(o.trial_id, trials):
+        o.storage.set_trial_system_attr(trial_id, WORKER, me)
+        o.storage.record_heartbeat(trial_id)
 
 
 @contextlib.contextmanager
 def _heartbeats(study, trials):
     """Records a heartbeat for each trial every HEARTBEAT seconds while the block runs."""
-    rdb = getattr(study, "ebrl_rdb", None)
+    o = opened(study)
+    ids = [o.trial_id(t) for t in trials]
     stop = threading.Event()
 
     def beat():
         while not stop.wait(HEARTBEAT):
-            for t in trials:
+            for trial_id in ids:
                 try:
-                    rdb.record_heartbeat(t._trial_id)
+                    o.storage.record_heartbeat(trial_id)
                 except Exception:  # a lost connection: the main thread's next call says so
                     pass
-    thread = threading.Thread(target=beat, daemon=True) if rdb is not None else None
-    if thread is not None:
-        thread.start()
+    thread = threading.Thread(target=beat, daemon=True)
+    thread.start()
     try:
         yield
     finally:
         stop.set()
-        if thread is not None:
-            thread.join()
+        thread.join()
 
 
 INTERRUPTED = "interrupted; asked again"
@@ -354,20 +407,28 @@ INTERRUPTED = "interrupted; asked again"
 def _now(study, states=None):
     """The study's trials as the storage holds them now (not through Optuna's cache of
     them, which another worker's trials can pass by), in the given states."""
-    rdb = getattr(study, "ebrl_rdb", None)
-    if rdb is None:
-        return study.get_trials(deepcopy=False, states=states)
-    return rdb.get_all_trials(study._study_id, deepcopy=False, states=states)
+    o = opened(study)
+    return o.storage.get_all_trials(o.study_id, deepcopy=False, states=states)
+
+
+def interrupted(trial):
+    """Whether a trial was cut by a kill (its settings asked again): failed, and marked
+    INTERRUPTED by rescue(), or failed by its stale heartbeat before any score or error
+    was recorded (fail_stale_trials can mark nothing: Optuna refuses to edit a finished
+    trial)."""
+    import optuna
+    error = trial.user_attrs.get("error")
+    return trial.state == optuna.trial.TrialState.FAIL and (
+        error == INTERRUPTED or (error is None and "rungs" not in trial.user_attrs))
 
 
 def _finished(study, trials=None):
-    """The trials that count towards n_trials: complete, or failed by their runs (not
-    those a kill interrupted, whose settings were asked again)."""
+    """The trials that count towards n_trials: complete, or failed but not interrupted
+    (their runs failed, or Optuna failed a value it refuses, NaN say)."""
     import optuna
     return [t for t in (_now(study) if trials is None else trials)
             if t.state == optuna.trial.TrialState.COMPLETE or (
-                t.state == optuna.trial.TrialState.FAIL
-                and t.user_attrs.get("error") != INTERRUPTED)]
+                t.state == optuna.trial.TrialState.FAIL and not interrupted(t))]
 
 
 def _promoted(value, study, share):
@@ -388,8 +449,9 @@ def _next_batch(problem, study, n_trials, batch):
     (the rest of the study is being run by others, or, for a problem with its own
     sampler, a generation is)."""
     import optuna
-    with _lock(study.ebrl_url):
-        _rescue(study)
+    o = opened(study)
+    with _lock(o.url):
+        rescue(study)
         trials = _now(study)
         finished = len(_finished(study, trials))
         if finished >= n_trials:
@@ -401,8 +463,8 @@ def _next_batch(problem, study, n_trials, batch):
                 study.sampler = problem.sampler(finished)
         else:
             k = min(batch, n_trials - finished - running)
-            if k > 0 and getattr(study, "ebrl_sampler", None) is not None:
-                study.sampler = study.ebrl_sampler(len(trials))
+            if k > 0 and o.reseed is not None:
+                study.sampler = o.reseed(len(trials))
         with warnings.catch_warnings():  # the heartbeats are this module's, not optimize's
             warnings.filterwarnings("ignore", "Heartbeat of storage", UserWarning)
             trials = [study.ask(problem.distributions()) for _ in range(max(k, 0))]

@@ -12,6 +12,7 @@ import math
 
 from numba import njit
 
+from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from tasks.kernels import bindings, sensing
 
 #: The body's fields, as every drive's record starts.

@@ -9,6 +9,7 @@ tau = kp (target - q) - kv dq, and the motors' controls that give them
 import numpy as np
 from numba import njit
 
+from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl import records
 from tasks.kernels import bindings, two_wheel as family
 from tasks.kernels.body import BODY_FIELDS

@@ -4,6 +4,7 @@
 move of D units the speed D / (n dt); the servos are deadbeat, so the phase does it."""
 from numba import njit
 
+from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl import records
 from tasks.kernels import bindings, two_wheel as family
 from tasks.kernels.body import BODY_FIELDS, step_phase

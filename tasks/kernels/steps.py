@@ -13,6 +13,7 @@ drive's kernels, so numba's cache of these entry points follows an edit of any o
 from numba import njit
 from numba.extending import overload
 
+from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from tasks.kernels import bindings, body, floating, gait, motors, planar, sensing, two_wheel, \
     wheels
 

@@ -12,6 +12,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl import records
 
 

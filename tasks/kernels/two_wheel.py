@@ -22,6 +22,7 @@ import numpy as np
 from numba import njit
 from numba.extending import overload
 
+from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from tasks.kernels import bindings, sensing
 from tasks.kernels.body import base_pose, factors
 
