@@ -25,6 +25,7 @@ STREAMS = {  # name: (obs_dim, intrinsic behaviour, groups, group weights, memor
 #: the actions' digest was exact there too, but the actions' last bits differ between
 #: machines (numpy's BLAS and math kernels per CPU), so they are compared rounded, from
 #: commit d5bc6e0 (which matched e425110's exact digests) run on a machine of today's kind.
+#: tests/data/make_golden.py computes them again (--check compares).
 BEFORE = {
     "one_group": ("68c03ebd04a2301c67fa9be9dfb9fc8c089d73a68a92a50553593f4aa00d106f",
                   "f1d92c4eef6e1e9b7ef9ed16943177dbbbf753b15cb8d8e6d63863e3fdfdf5cc"),
