@@ -71,11 +71,13 @@ class TaskConfig:
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
                 raise ValueError(f"{name} must be a finite number, got {v!r}")
             if v < 0 or (v == 0 and name in ("sensor_range", "radius")):
-                raise ValueError(f"{name} must be {'positive' if name in ('sensor_range', 'radius') else 'non-negative'}, got {v!r}")
+                sign = "positive" if name in ("sensor_range", "radius") else "non-negative"
+                raise ValueError(f"{name} must be {sign}, got {v!r}")
         if self.action_noise >= 1:
             raise ValueError(f"action_noise must be below 1, got {self.action_noise!r}")
         if self.radius is not None and self.radius > 5:
-            raise ValueError(f"radius must be at most 5 units (the corridors are 10 wide), got {self.radius!r}")
+            raise ValueError("radius must be at most 5 units (the corridors are 10 wide), "
+                             f"got {self.radius!r}")
         if not isinstance(self.start_jitter, bool):
             raise ValueError(f"start_jitter must be true or false, got {self.start_jitter!r}")
         if self.restitution > 1:

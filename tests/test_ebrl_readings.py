@@ -238,7 +238,8 @@ def test_episode_continuing_lets_eq7_cross_a_trial_end(episode):
     before = ag.reliability.copy()  # 0.5^3, 0.5^2, 0.5
     _step(ag, 5, 1.0, last=True)   # memory acts as element 1; eq 7 from it
     assert ag.memory_decisions == 1
-    up = lambda r: (r + 0.5 * (1 - r)) * 0.5  # eq 7 (r = 1), then the decay
+    def up(r):  # eq 7 (r = 1), then the decay
+        return (r + 0.5 * (1 - r)) * 0.5
     want = [up(before[0]) if episode == "continuing" else before[0] * 0.5,
             up(before[1]), before[2] * 0.5, 0.5]
     np.testing.assert_array_equal(ag.reliability, want)
@@ -294,8 +295,11 @@ def test_eq7_scope_to_start_or_decided_only(scope):
     before = ag.reliability.copy()
     _step(ag, 2, 1.0, last=True)
     assert ag.memory_decisions == 2
-    up = lambda r: (r + 0.5 * (1 - r)) * 0.5
-    decay = lambda r: r * 0.5
+    def up(r):
+        return (r + 0.5 * (1 - r)) * 0.5
+
+    def decay(r):
+        return r * 0.5
     if scope == "to_start":
         want = [up(before[0]), up(before[1]), up(before[2]), decay(before[3]), 0.5]
     else:

@@ -347,7 +347,8 @@ def test_sweep_table_takes_the_default_rows_from_a_baseline_run(clean_run, tmp_p
     proc = ebrl(*sweep, "--seeds", "0-2", check=False)
     assert proc.returncode != 0 and "lacks some of these runs" in proc.stderr
     assert "Traceback" not in proc.stderr
-    assert not (tmp_path / "sweeps" / "policy_threshold_0.05" / "two_wheel" / "avoidance" / "seed_002").exists()
+    sweep = tmp_path / "sweeps" / "policy_threshold_0.05"
+    assert not (sweep / "two_wheel" / "avoidance" / "seed_002").exists()
 
 
 @pytest.mark.parametrize("robot,camera", [("floating", "top"), ("diff_drive", "follow"),

@@ -29,7 +29,8 @@ class Reading:
 
 
 #: The switches' values come from where they are defined (ebrl.config.READINGS,
-#: tasks.config.BUMPS, BLOCKED_MOVES, LEFTOVER_TURNS); the numbers tried for the numeric ones are the ablation's own.
+#: tasks.config.BUMPS, BLOCKED_MOVES, LEFTOVER_TURNS); the numbers tried for the numeric
+#: ones are the ablation's own.
 READINGS = (
     Reading("bump", BUMPS, drives=("floating",),
             what="the floating robot at a wall"),
@@ -45,7 +46,8 @@ READINGS = (
             what="a blocked move's rest turns the commanded way, or away from the nearer side"),
     Reading("episode", AGENT_READINGS["episode"],
             what="an episode is one trial, or one continuing episode across trials"),
-    Reading("recall_at_trial_end", AGENT_READINGS["recall_at_trial_end"], what="the recall table at a trial's end"),
+    Reading("recall_at_trial_end", AGENT_READINGS["recall_at_trial_end"],
+            what="the recall table at a trial's end"),
     Reading("initial_reliability", (1.0, 0.5, 0.0), what="a new element's reliability"),
     Reading("eq7_scope", AGENT_READINGS["eq7_scope"],
             what="eq 7 walks to the episode's start, or changes only deciding elements"),

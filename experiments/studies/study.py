@@ -31,12 +31,13 @@ Several workers (the same command on several machines, one storage URL, PostgreS
 share a study. Each records who runs a trial (host and process) and a heartbeat every
 HEARTBEAT seconds while it runs; a trial left running is taken as dead, and asked again,
 when its process is gone from this machine, its heartbeat is older than GRACE seconds (a
-machine that died), or no worker claimed it (one killed between asking and claiming). The steps that must not interleave (making the storage's tables,
-the first trial, rescuing, asking a batch) run under one lock: a PostgreSQL advisory lock,
-or a file lock beside an SQLite file. A worker asks no more trials than the study lacks
-beside those the others run, and waits for theirs before it ends; a problem with its own
-sampler (`ebrl evolve`'s CMA-ES generations) has a batch asked only when no trial runs,
-so that a generation is asked whole, by one worker, from the trials before it.
+machine that died), or no worker claimed it (one killed between asking and claiming). The
+steps that must not interleave (making the storage's tables, the first trial, rescuing,
+asking a batch) run under one lock: a PostgreSQL advisory lock, or a file lock beside an
+SQLite file. A worker asks no more trials than the study lacks beside those the others
+run, and waits for theirs before it ends; a problem with its own sampler (`ebrl evolve`'s
+CMA-ES generations) has a batch asked only when no trial runs, so that a generation is
+asked whole, by one worker, from the trials before it.
 
 A storage that fails while a study runs (a lost database connection) is StorageError: one
 line, the finished trials kept, the same command resumes. A URL is shown with its password
