@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 DEMO_OUT ?= demo_results
 
-.PHONY: demo test bench clean
+.PHONY: demo lint test bench clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -22,9 +22,13 @@ $(VENV)/.installed-test: $(VENV)/.installed
 demo: $(VENV)/.installed
 	$(BIN)/ebrl demo --out $(DEMO_OUT)
 
+# ruff (pyproject.toml's [tool.ruff]); make test runs it first, so CI (.ci/run) lints.
+lint: $(VENV)/.installed-test
+	$(BIN)/ruff check .
+
 # Two workers (tests/conftest.py keeps the tests that start Ray or PostgreSQL on one);
 # the 15 slowest tests listed at the end (make test stays under 10 minutes on 2 cores).
-test: $(VENV)/.installed-test
+test: lint $(VENV)/.installed-test
 	$(BIN)/python -m pytest -q -n 2 --dist loadgroup --durations=15
 
 bench: $(VENV)/.installed

@@ -83,4 +83,4 @@ from ebrl.agent import Agent
 from ebrl.config import Config, paper_config
 from ebrl.similarity import similarity
 
-__all__ = ["Agent", "Config", "paper_config", "similarity", "intrinsic"]
+__all__ = ["Agent", "Config", "paper_config", "similarity", "intrinsic", "baselines", "behaviour"]

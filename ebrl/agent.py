@@ -29,8 +29,11 @@ The work of each step is done by two compiled kernels, ebrl.kernels.act and
 ebrl.kernels.learn, on the arrays this class holds; the agent's random stream is one
 exploration draw per act, then the fallback's draws when the fallback acts.
 """
+from __future__ import annotations
+
 import math
 import types
+from collections.abc import Callable, Sequence
 
 import numpy as np
 from numba import njit
@@ -76,9 +79,15 @@ def invalid_observation(x):
     return ValueError("observation too large: |x|^2 overflows")
 
 
+#: A fallback behaviour: (ranges, the agent's random stream) -> an action of action_dim
+#: values (ebrl.intrinsic.fallback_for builds the paper's; any such callable will do).
+Fallback = Callable[[np.ndarray, np.random.Generator], np.ndarray]
+
+
 class Agent:
-    def __init__(self, config, obs_dim, action_dim, fallback, *, groups=None,
-                 group_weights=None, seed=None):
+    def __init__(self, config: Config, obs_dim: int, action_dim: int, fallback: Fallback, *,
+                 groups: Sequence[Sequence[int]] | None = None,
+                 group_weights: Sequence[float] | None = None, seed: int | None = None) -> None:
         if not isinstance(config, Config):
             raise ValueError("config must be an ebrl.Config")
         if int(obs_dim) < 1 or int(action_dim) < 1:
@@ -138,39 +147,39 @@ class Agent:
     del _counter
 
     @property
-    def decision(self):
+    def decision(self) -> str | None:
         """Who chose the last act's action, one of DECIDERS (videos colour by it); a
         Python fallback without a choice reads "fallback"; None before any act."""
         code = kernels.counters(self.record)[6]
         return DECIDERS[code] if code >= 0 else self._python_choice
 
     @property
-    def used_memory(self):
+    def used_memory(self) -> bool:
         """True when the memory chose the last act's action."""
         return kernels.counters(self.record)[6] == kernels.MEMORY
 
     _python_choice = None
 
     @property
-    def reliability(self):
+    def reliability(self) -> np.ndarray:
         return self.memory.rel[: self.size].copy()
 
     @property
-    def utility(self):
+    def utility(self) -> np.ndarray:
         return self.memory.utility[: self.size]
 
     @property
-    def variance(self):
+    def variance(self) -> np.ndarray:
         """eq 2's V_i over the stored inputs, kept from running sums, floored."""
         return self.memory.variance.copy()
 
-    def recall_table(self):
+    def recall_table(self) -> tuple[np.ndarray, np.ndarray]:
         """(element slots, weights W) of the recall table, best first."""
         m = self.memory
         used = m.table >= 0
         return m.table[used].copy(), m.table_w[used].copy()
 
-    def similarities(self, x):
+    def similarities(self, x: np.ndarray) -> np.ndarray:
         """eq 2-4 for x against every stored element, by the kernel act uses."""
         m = self.memory
         out = np.zeros(self.size)
@@ -179,7 +188,7 @@ class Agent:
         return out
 
     # -- acting --------------------------------------------------------------------
-    def act(self, obs, ranges=None):
+    def act(self, obs: np.ndarray, ranges: np.ndarray | None = None) -> np.ndarray:
         """The action for observation obs (1-D). The fallback gets ranges, or obs."""
         x = np.array(obs, dtype=np.float64)
         if x.shape != (self.obs_dim,):
@@ -198,7 +207,7 @@ class Agent:
         return self._action.copy()
 
     # -- learning ------------------------------------------------------------------
-    def learn(self, reward, last=False):
+    def learn(self, reward: float, last: bool = False) -> None:
         """Stores the last act's experience, learns from reward, ends the trial if last."""
         reward = float(reward)
         if not math.isfinite(reward):
@@ -209,7 +218,7 @@ class Agent:
         if last:
             self.end_episode()
 
-    def end_episode(self):
+    def end_episode(self) -> None:
         """A trial ends (learn(..., last=True) calls this).
 
         episode "trial": the episode ends with it, so the next element has no backward

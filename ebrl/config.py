@@ -84,7 +84,7 @@ class Config:
             reading.check(getattr(self, reading.name))
 
 
-def paper_config(column, **overrides):
+def paper_config(column: str, **overrides: object) -> Config:
     """Table 1's parameters in column "T" or "F" (they differ in memory size), with
     overrides."""
     if column not in TABLE1_MEMORY:

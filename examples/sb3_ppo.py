@@ -14,8 +14,6 @@ short training reaches the goal rarely; the point here is the plumbing.
 import argparse
 import sys
 
-import numpy as np
-
 ENV_ID = "tasks.gym:EBRL/TwoWheel-v0"
 
 

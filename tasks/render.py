@@ -153,7 +153,7 @@ class Renderer:
     def __del__(self):
         try:
             self.close()
-        except Exception:  # noqa: BLE001  (an interpreter shutting down)
+        except Exception:  # an interpreter shutting down
             pass
 
 

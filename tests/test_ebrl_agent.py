@@ -85,7 +85,8 @@ def test_memory_smaller_than_recall_table_and_paper_config():
 def test_ebrl_never_imports_the_simulator():
     import subprocess
     import sys
-    code = "import sys, ebrl, ebrl.benchmark; print(any(m.split('.')[0] in ('mujoco', 'dm_control', 'tasks') for m in sys.modules))"
+    code = ("import sys, ebrl, ebrl.benchmark; "
+            "print(any(m.split('.')[0] in ('mujoco', 'dm_control', 'tasks') for m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
 

@@ -49,7 +49,8 @@ def test_eq3_eq4_weighted_modalities_by_hand(similarity):
     x = np.array([0.0, 0.0, 1.0])
     y = np.array([[1.0, 1.0, 3.0]])
     v = np.array([1.0, 1.0, 2.0])
-    # group A = (0, 1): sum = 2, n = 2 -> S'_A = 1 - sqrt(2/4) ; group B = (2): (2^2)/2 = 2, n = 1 -> 1 - sqrt(1)
+    # group A = (0, 1): sum = 2, n = 2 -> S'_A = 1 - sqrt(2/4) ;
+    # group B = (2): (2^2)/2 = 2, n = 1 -> 1 - sqrt(1)
     s_a, s_b = 1 - math.sqrt(0.5), 0.0
     s = similarity(x, y, v, groups=[[0, 1], [2]], weights=[0.7, 0.3])
     assert s[0] == pytest.approx((0.7 * s_a + 0.3 * s_b) / 1.0)

@@ -9,6 +9,7 @@ import subprocess
 import sys
 import time
 
+import numba
 import numpy as np
 import pytest
 
@@ -71,7 +72,8 @@ def test_a_short_run_writes_every_file(clean_run):
         assert {p.name for p in run.iterdir()} == {"config.json", "trials.csv", "trace.npz", "run.json"}
         config = json.loads((run / "config.json").read_text())
         assert config["steps"] == 400 and config["agent"]["recall_size"] == 7
-        assert {"mujoco", "numpy", "git_commit"} <= set(config["versions"])
+        assert {"mujoco", "numpy", "numba", "llvmlite", "git_commit"} <= set(config["versions"])
+        assert config["versions"]["numba"] == numba.__version__
         record = json.loads((run / "run.json").read_text())
         assert record["status"] == "complete"
         rows = (run / "trials.csv").read_text().splitlines()
@@ -345,7 +347,8 @@ def test_sweep_table_takes_the_default_rows_from_a_baseline_run(clean_run, tmp_p
     proc = ebrl(*sweep, "--seeds", "0-2", check=False)
     assert proc.returncode != 0 and "lacks some of these runs" in proc.stderr
     assert "Traceback" not in proc.stderr
-    assert not (tmp_path / "sweeps" / "policy_threshold_0.05" / "two_wheel" / "avoidance" / "seed_002").exists()
+    sweep = tmp_path / "sweeps" / "policy_threshold_0.05"
+    assert not (sweep / "two_wheel" / "avoidance" / "seed_002").exists()
 
 
 @pytest.mark.parametrize("robot,camera", [("floating", "top"), ("diff_drive", "follow"),
@@ -372,6 +375,7 @@ env.reset()
 px = env.physics.render(height=240, width=360, camera_id="top")
 assert px.shape == (240, 360, 3) and px.std() > 10
 # The top camera sees the whole room: the dark outer walls lie on all four borders.
+import numba
 import numpy as np
 dark = px.mean(axis=2) < 110
 assert dark[:, :40].any() and dark[:, -40:].any() and dark[:40].any() and dark[-40:].any()

@@ -4,7 +4,6 @@ import csv
 import dataclasses
 import json
 
-import numpy as np
 import pytest
 
 from experiments.running import protocol, results, runner

@@ -65,7 +65,6 @@ def test_reset_with_a_seed_reproduces_a_trajectory(env_id):
             out.append(obs["range"].copy())
         return np.array(out)
 
-    from tasks import kernels
     timer = bindings._TIMER_CALLBACK.value  # step turns MuJoCo's timers off, then back on
     a, b = gymnasium.make(env_id), gymnasium.make(env_id)
     first = rollout(a, 7)

@@ -41,7 +41,7 @@ def test_the_compiled_step_is_the_hooks_step_for_step(robot, fields):
     assert compiled.steps_compiled and not hooks.steps_compiled
     dim = compiled.action_spec().shape[0]
     rng = np.random.default_rng(3)
-    ts = [compiled.reset(), hooks.reset()]
+    compiled.reset(), hooks.reset()
     goals = 0
     for i in range(600):
         # out-of-range demands (clipped); after step 300, straight into the goal

@@ -164,7 +164,8 @@ BAD = [
      'geom = "pointbody"\n[beams]\nheight = 0.5\n[action]\nkind = "wheels"\nleft = "a"\nright = "b"',
      "joints: body 'torso' has joints of its own"),
     ('file = "{pt}"\ndrive = "two_wheel"\nbase = "torso"\n[bumper]\nradius = 0.2\n'
-     '[beams]\nheight = 0.5\n[action]\nkind = "servos"', "bumper: missing"),    ('file = "{pt}"\ndrive = "floating"\nbase = "torso"\n[bumper]\ngeom = "pointbody"\n'
+     '[beams]\nheight = 0.5\n[action]\nkind = "servos"', "bumper: missing"),
+    ('file = "{pt}"\ndrive = "floating"\nbase = "torso"\n[bumper]\ngeom = "pointbody"\n'
      '[beams]\nheight = 0.5\n[action]\nkind = "wheels"', "action.kind: the floating drive takes one of"),
     (CAR.replace('"turn"]', '"steer"]'), "action.motors: no actuator named 'steer' in"),
     (CAR.replace('left = "left"', 'left = "left_hinge"'), "action.left: no joint named 'left_hinge' in"),

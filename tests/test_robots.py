@@ -82,7 +82,8 @@ def test_planar_trajectories_unchanged_by_the_registry():
     cut from protocol 5's clean-clone run; protocol 5's readings and eq 2-4's reciprocals
     changed every run). Bit for bit on one kind of machine: numpy's BLAS and math kernels
     round the last bit per CPU (same code, same seeds), so on another kind a run may part
-    from these by a hundredth of a unit after some thousands of steps."""
+    from these by a hundredth of a unit after some thousands of steps. Made again, or
+    checked, by tests/data/make_golden.py."""
     with np.load(ROOT / "tests" / "data" / f"planar_traces_v{protocol.PROTOCOL_VERSION}.npz") as z:
         expected = {k: z[k] for k in z.files}
     for key, trace in expected.items():

@@ -37,10 +37,14 @@ def ray_to_box_from_outside(px, py, dx, dy, box):
 def ray_to_field_from_inside(px, py, dx, dy):
     x0, x1, y0, y1 = FIELD
     ts = []
-    if dx > 1e-12: ts.append((x1 - px) / dx)
-    if dx < -1e-12: ts.append((x0 - px) / dx)
-    if dy > 1e-12: ts.append((y1 - py) / dy)
-    if dy < -1e-12: ts.append((y0 - py) / dy)
+    if dx > 1e-12:
+        ts.append((x1 - px) / dx)
+    if dx < -1e-12:
+        ts.append((x0 - px) / dx)
+    if dy > 1e-12:
+        ts.append((y1 - py) / dy)
+    if dy < -1e-12:
+        ts.append((y0 - py) / dy)
     return min(ts)
 
 

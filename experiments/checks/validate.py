@@ -88,7 +88,8 @@ def number(kind, name, text):
     try:
         value = kind(text)
     except ValueError:
-        raise ValueError(f"bad value for {name}: {text!r} (not {'an integer' if kind is int else 'a number'})") from None
+        what = "an integer" if kind is int else "a number"
+        raise ValueError(f"bad value for {name}: {text!r} (not {what})") from None
     if isinstance(value, float) and not math.isfinite(value):
         raise ValueError(f"bad value for {name}: {text!r} (not a finite number)")
     return value

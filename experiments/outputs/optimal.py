@@ -220,5 +220,6 @@ def table(rows):
         lines.append(f"| {r['robot']} | {r['condition']} | {r['optimal_length']:.1f} | {steps} "
                      f"| {r['best_trial_steps'] if r['best_trial_steps'] is not None else '-'} "
                      f"| {r['median_last_trial_steps'] if r['median_last_trial_steps'] is not None else '-'} "
-                     f"| {'-' if ratio is None else f'{ratio:.1f}x'} | {r['seeds_with_optimal_trial']}/{r['seeds']} |")
+                     f"| {'-' if ratio is None else f'{ratio:.1f}x'} "
+                     f"| {r['seeds_with_optimal_trial']}/{r['seeds']} |")
     return "\n".join(lines)

@@ -57,7 +57,8 @@ def comparison_rows(summary):
                                                else ref[key])
             rows.append({
                 "robot": g["robot"], "condition": g["condition"], "figure": label,
-                "paper": theirs, "paper_sd": ref[key].get("sd") if ref and isinstance(ref[key], dict) else None,
+                "paper": theirs,
+                "paper_sd": ref[key].get("sd") if ref and isinstance(ref[key], dict) else None,
                 "ours": ours, "sd": sd, "ci95": ci, "digits": digits,
                 "ratio": (ours / theirs) if ours is not None and theirs else None,
                 "inside": (ci[0] <= theirs <= ci[1]) if ci and theirs is not None else None,
@@ -79,7 +80,8 @@ def comparison_table(summary):
 
 
 def goals_table(summary):
-    lines = ["| robot | condition | budget | reached first goal | goals min / median / max | runs below 30 goals |",
+    lines = ["| robot | condition | budget | reached first goal | goals min / median / max "
+             "| runs below 30 goals |",
              "|---|---|---:|---:|---|---:|"]
     for g in summary["groups"]:
         f = g["first_trial_steps"]

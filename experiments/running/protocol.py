@@ -5,17 +5,27 @@ next starts from the jittered start, and the memory persists, until the budget o
 agent steps is spent. `execute` computes a run and returns plain data, so the
 same function serves a local process pool and a Ray cluster; the driver writes it.
 """
+from __future__ import annotations
+
 import dataclasses
 import functools
 import pathlib
 import time
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 import ebrl
+from ebrl.behaviour import Accelerating, Turning
+
+if TYPE_CHECKING:  # tasks is imported where a spec needs it, not with this module
+    from tasks.config import TaskConfig
+    from tasks.robots import Robot
 
 #: Bump when a change alters what a run computes, so stale results are not reused.
-PROTOCOL_VERSION = 5  # 5: stage 1's readings, eq 2-4 by reciprocals; 4: the adopted readings per drive, diff_drive's Euler; 3: float64 similarity
+#: 5: stage 1's readings, eq 2-4 by reciprocals; 4: the adopted readings per drive,
+#: diff_drive's Euler; 3: float64 similarity (CHANGELOG.md: each version, its commit).
+PROTOCOL_VERSION = 5
 #: Positions are stored as int16 hundredths of a unit.
 TRACE_SCALE = 100.0
 #: The end of a first-trial run's label (RunSpec.first_trial): "two_wheel.first_trial".
@@ -30,26 +40,26 @@ class RunSpec:
     seed: int
     steps: int
     #: Agent parameters that differ from Table 1 (for sweeps), as sorted pairs.
-    overrides: tuple = ()
+    overrides: tuple[tuple[str, Any], ...] = ()
     #: The drive of a robot file (None for a registered robot: the registry has it).
-    drive: str = None
+    drive: str | None = None
     #: The learner: "ebrl" (the paper's) or a baseline of ebrl.baselines ("qtable", "mfec").
     agent: str = "ebrl"
     #: A genome of ebrl.behaviour (`ebrl run --behaviour FILE`): the fallback, its random
     #: action and the learning variables' initial values; None: Section 3.4's rules.
-    behaviour: object = None
+    behaviour: Turning | Accelerating | None = None
     #: True: the run ends at its first goal (or its budget), its first trial bit for bit
     #: a full run's (`ebrl run --first-trial`); in its own folders (`label`).
     first_trial: bool = False
 
     @property
-    def entry(self):
+    def entry(self) -> Robot:
         """The robot's registry entry (tasks.robots.Robot)."""
         from tasks.robots import resolve
         return resolve(self.robot, self.drive)
 
     @property
-    def label(self):
+    def label(self) -> str:
         """The robot's name in folders and tables: its registered name, or its file's stem;
         with ".<agent>" after it for a learner other than EBRL, and FIRST_TRIAL after
         that for a first-trial run."""
@@ -59,10 +69,10 @@ class RunSpec:
         return name + FIRST_TRIAL if self.first_trial else name
 
     @property
-    def name(self):
+    def name(self) -> str:
         return f"{self.label}/{self.condition}/seed_{self.seed:03d}"
 
-    def agent_config(self):
+    def agent_config(self) -> Any:
         """EBRL: Table 1's column for the robot; a baseline: its config's defaults; with the
         robot's readings (tasks.robots.Drive.readings), then the overrides, that name the
         config's fields."""
@@ -77,14 +87,14 @@ class RunSpec:
             return ebrl.paper_config(self.entry.table1, **mine)
         return config_cls(**mine)
 
-    def task_config(self):
+    def task_config(self) -> TaskConfig:
         """The paper's task with the robot's readings, then the overrides that name task
         fields."""
         from tasks.config import TaskConfig
         fields = {f.name for f in dataclasses.fields(TaskConfig)}
         return self.entry.task_config(**{k: v for k, v in self.overrides if k in fields})
 
-    def parameters(self):
+    def parameters(self) -> dict[str, Any]:
         """Everything that determines the run's result; a rerun matches on this."""
         entry, task = self.entry, self.task_config()
         return {

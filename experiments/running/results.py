@@ -160,10 +160,15 @@ def dumps(obj):
 
 
 def versions():
+    """The packages a run's numbers depend on (numba and llvmlite compile the agent's and
+    the tasks' kernels), with the git commit."""
     import dm_control
+    import llvmlite
     import mujoco
+    import numba
     out = {"python": platform.python_version(), "numpy": np.__version__,
-           "mujoco": mujoco.__version__, "dm_control": getattr(dm_control, "__version__", "?")}
+           "mujoco": mujoco.__version__, "dm_control": getattr(dm_control, "__version__", "?"),
+           "numba": numba.__version__, "llvmlite": llvmlite.__version__}
     try:
         commit = subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True,
                                 cwd=pathlib.Path(__file__).parent, timeout=10).stdout.strip()

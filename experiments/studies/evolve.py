@@ -289,7 +289,8 @@ def _write(s, out, problem):
     name = s.study_name
     trial, genome = best_genome(s, problem)
     lines = [f"# `ebrl evolve`: study `{name}`", "",
-             f"Robot {problem.robot}, {'EBRL learning' if problem.learning else 'no learning (the behaviour alone)'}"
+             f"Robot {problem.robot}, "
+             f"{'EBRL learning' if problem.learning else 'no learning (the behaviour alone)'}"
              f", seeds {', '.join(map(str, problem.seeds))}, "
              f"{problem.steps or 'the robot budget'} steps a run, population {problem.population}. "
              "Fitness: mean goals within the budget over those seeds (experiments/studies/evolve.py).", "",

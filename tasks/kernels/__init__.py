@@ -4,7 +4,7 @@ The mirror of ebrl/kernels.py for the simulator side, one module per job:
 
 | module | what |
 |---|---|
-| `bindings` | MuJoCo's C functions, views of its struct fields, its stage timers, the substeps (`run`) and the statuses |
+| `bindings` | MuJoCo's C functions, its struct fields' views, its stage timers, `run`, the statuses |
 | `sensing` | the read-outs: pose, rangefinder distances and Section 3.2's code, velocity |
 | `stream` | the task's random stream (numpy's legacy draws, buffered) |
 | `body` | what every drive's record holds and the kernels every drive shares (goal, codes, noise) |

@@ -41,7 +41,7 @@ binding.load_library_permanently(_LIBRARY[0])
 _TIMER_CALLBACK = ctypes.c_void_p.in_dll(ctypes.CDLL(_LIBRARY[0]), "mjcb_time")
 
 
-class stage_timers_off:  # noqa: N801  used as a function: `with stage_timers_off():`
+class stage_timers_off:  # a class named as a function: `with stage_timers_off():`
     """MuJoCo's stage timers off inside the block, the previous callback back after it.
 
     The mujoco package sets mjcb_time at import (a clock for mjData.timer, its profiler's

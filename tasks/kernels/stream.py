@@ -101,10 +101,11 @@ def task_draws(st, u, z, sensor_noise, vz, velocity_noise):
 
 
 class TaskStream:
-    """The task's RandomState as the compiled draws read it (Stream, in `record`): `fill` saves the RandomState's state and draws a buffer of its next
-    doubles; `settle` winds it to just past the doubles the draws used, with
-    legacy_gauss's cached value as they left it. While a buffer is out, the RandomState
-    itself is ahead of what was used: `settled()` is the way to it."""
+    """The task's RandomState as the compiled draws read it (Stream, in `record`): `fill`
+    saves the RandomState's state and draws a buffer of its next doubles; `settle` winds
+    it to just past the doubles the draws used, with legacy_gauss's cached value as they
+    left it. While a buffer is out, the RandomState itself is ahead of what was used:
+    `settled()` is the way to it."""
 
     def __init__(self, random):
         self._random = random

@@ -48,8 +48,7 @@ __all__ = ["parse", "robot_spec", "classes", "Mount", "MountError", "Bumper", "B
 
 
 def classes(mount: Mount) -> Classes:
-    """The Task class and substeps function (None: the drive's own) and the Physics class
-    of the mount's action kind: tasks.load's for a mounted robot."""
+    """The Task class (None: the drive's own) and the Physics class of the mount's
+    action kind: tasks.load's for a mounted robot."""
     return mount.action.classes(mount)
-import dataclasses
 

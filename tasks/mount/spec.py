@@ -89,7 +89,7 @@ def _drop_sensors(mount, spec, drop):
             fail(mount.path, "beams.sensors", f"no rangefinder named {name!r} in {mount.model}")
     for sensor in list(spec.sensors):
         is_beam = sensor.type == mujoco.mjtSensor.mjSENS_RANGEFINDER
-        if ("sensors" in drop and sensor.name not in beam_names) or (is_beam and sensor.name not in beam_names):
+        if ("sensors" in drop or is_beam) and sensor.name not in beam_names:
             spec.delete(sensor)   # only the beams the mount names (or adds) are read
     return beam_names
 

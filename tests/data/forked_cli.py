@@ -42,7 +42,7 @@ if __name__ == "__main__":
     # what a command imports when it runs, imported once here: the parser's registry
     # (MuJoCo, dm_control, numba), the runner and the report
     build_parser()
-    import experiments.outputs.report  # noqa: F401
+    import experiments.outputs.report
     import experiments.running.runner  # noqa: F401
     cases = json.loads(open(sys.argv[1]).read())
     scratch = os.path.dirname(os.path.abspath(sys.argv[2]))

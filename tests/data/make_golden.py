@@ -1,24 +1,87 @@
-"""Makes the golden test data again: `python tests/data/make_golden.py [--check]`.
+"""Makes the golden test data again, or checks the committed copy against a fresh one.
 
-- step_digests_v<PROTOCOL_VERSION>.json: for every registered robot and shipped mount
-  (and a few readings), the sha256 of its steps under random actions, by the hooks and
-  by the compiled step (tests/test_step_digests.py).
+    python tests/data/make_golden.py           # writes tests/data/planar_traces_v<N>.npz
+                                               # and step_digests_v<N>.json, prints the
+                                               # readings digests to paste
+    python tests/data/make_golden.py --check   # regenerates into a temporary folder and
+                                               # compares; exit status 1 on a difference
 
---check makes them into memory and compares them with the committed files (exit 1 on a
-difference); without it, the files are written anew.
+What it makes, and which test reads it:
+
+- tests/data/planar_traces_v<PROTOCOL_VERSION>.npz (tests/test_robots.py,
+  test_planar_trajectories_unchanged_by_the_registry): the first STEPS steps of seeds
+  SEEDS, every paper robot and condition, each the int16 trace of protocol.execute, keyed
+  "<robot>__<condition>__seed_NNN". The committed file was cut from the full clean-clone
+  run behind RESULTS.md; a run's first steps are the same whatever its budget, which the
+  test checks.
+- tests/data/step_digests_v<PROTOCOL_VERSION>.json (tests/test_step_digests.py): for
+  every registered robot and shipped mount (and a few readings), the sha256 of its steps
+  under random actions (`step_digest`), by the hooks and by the compiled step. The
+  committed file was made at 55615e7, before the drives' Python twins went and the car
+  and the Ant were compiled.
+- BEFORE, the readings digests in tests/test_ebrl_readings.py (sha256 of the actions
+  rounded to 1e-9 and of the memory's final state, of the test's fixed input stream with
+  protocol 3's readings), computed by that test file's own `stream` and `digests`. Being
+  source, they are printed rather than written.
+
+Both are bit for bit on one kind of machine only (numpy's BLAS and math kernels round the
+last bit per CPU): remake them on the machine kind the tests run on, and only when a
+change is meant to alter what a run computes (a new PROTOCOL_VERSION).
 """
+import argparse
 import hashlib
 import json
 import pathlib
 import sys
+import tempfile
 
 import numpy as np
 
 HERE = pathlib.Path(__file__).resolve().parent
-#: Readings tried beyond each robot's own, by robot.
+ROOT = HERE.parents[1]
+for _path in (ROOT, ROOT / "tests"):  # the packages, and the test module the digests live in
+    if str(_path) not in sys.path:
+        sys.path.insert(0, str(_path))
+
+#: The traces: the first STEPS agent steps of these seeds.
+STEPS = 3000
+SEEDS = (0, 1)
+
+
+def traces_name():
+    from experiments.running import protocol
+    return f"planar_traces_v{protocol.PROTOCOL_VERSION}.npz"
+
+
+def make_traces():
+    """{key: int16 trace of STEPS + 1 positions} for every paper robot and condition."""
+    from ebrl.intrinsic import CONDITIONS
+    from experiments.running import protocol
+    from tasks.robots import PAPER_ROBOTS
+    out = {}
+    for robot in PAPER_ROBOTS:
+        for condition in CONDITIONS:
+            for seed in SEEDS:
+                spec = protocol.RunSpec(robot, condition, seed, STEPS)
+                out[f"{robot}__{condition}__seed_{seed:03d}"] = protocol.execute(spec)["trace"]
+    return out
+
+
+def write_traces(folder):
+    path = pathlib.Path(folder) / traces_name()
+    np.savez_compressed(path, **make_traces())
+    return path
+
+
+#: Readings tried beyond each robot's own, by robot (the step digests).
 EXTRA_FIELDS = {"two_wheel": [{"blocked_move": "refuse"}], "diff_drive": [{"blocked_move": "refuse"}],
                 "floating": [{"bump": "bounce", "velocity_noise": 0.1}],
                 "hovercraft": [{"bump": "bounce", "velocity_noise": 0.1}]}
+
+
+def step_digests_name():
+    from experiments.running import protocol
+    return f"step_digests_v{protocol.PROTOCOL_VERSION}.json"
 
 
 def step_digest(robot, compiled, **fields):
@@ -46,7 +109,7 @@ def step_digest(robot, compiled, **fields):
     return h.hexdigest()
 
 
-def step_digests():
+def make_step_digests():
     """{robot/hooks|compiled/fields: digest} for every robot and mount."""
     import tasks
     out = {}
@@ -58,20 +121,71 @@ def step_digests():
     return out
 
 
-def main(argv):
-    from experiments.running import protocol
-    check = "--check" in argv
-    path = HERE / f"step_digests_v{protocol.PROTOCOL_VERSION}.json"
-    made = step_digests()
-    if check:
-        committed = json.loads(path.read_text())
-        differ = sorted(k for k in set(made) | set(committed) if made.get(k) != committed.get(k))
-        print(f"{path.name}: {'differs at ' + ', '.join(differ) if differ else 'the same'}")
-        return 1 if differ else 0
-    path.write_text(json.dumps(made, indent=1, sort_keys=True) + "\n")
+def make_digests():
+    """{stream name: (actions digest, state digest)}, as tests/test_ebrl_readings.py's
+    BEFORE holds them."""
+    import test_ebrl_readings as t
+    return {name: t.digests(*t.stream(name, **t.PROTOCOL3)) for name in t.STREAMS}
+
+
+def check():
+    """The differences between the committed data and a fresh copy, one line each."""
+    import test_ebrl_readings
+    problems = []
+    committed = HERE / traces_name()
+    with tempfile.TemporaryDirectory() as scratch:
+        fresh = write_traces(scratch)
+        if not committed.is_file():
+            problems.append(f"{committed} is missing")
+        else:
+            with np.load(committed) as old, np.load(fresh) as new:
+                if set(old.files) != set(new.files):
+                    problems.append(f"{committed.name}: keys {sorted(old.files)} "
+                                    f"against {sorted(new.files)}")
+                for key in sorted(set(old.files) & set(new.files)):
+                    a, b = old[key], new[key]
+                    if a.dtype != b.dtype or a.shape != b.shape:
+                        problems.append(f"{committed.name} {key}: {a.dtype}{a.shape} "
+                                        f"against {b.dtype}{b.shape}")
+                    elif not np.array_equal(a, b):
+                        first = int(np.flatnonzero((a != b).any(axis=1))[0])
+                        problems.append(f"{committed.name} {key}: differs from step {first}")
+    committed = json.loads((HERE / step_digests_name()).read_text())
+    made = make_step_digests()
+    for key in sorted(set(made) | set(committed)):
+        if made.get(key) != committed.get(key):
+            problems.append(f"{step_digests_name()} {key}: {made.get(key)} against {committed.get(key)}")
+    for name, got in make_digests().items():
+        if got != test_ebrl_readings.BEFORE[name]:
+            problems.append(f"test_ebrl_readings.BEFORE[{name!r}]: {got} against "
+                            f"{test_ebrl_readings.BEFORE[name]}")
+    return problems
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--check", action="store_true",
+                        help="regenerate into a temporary folder and compare with the "
+                             "committed data; nothing is written here")
+    args = parser.parse_args(argv)
+    if args.check:
+        problems = check()
+        for line in problems:
+            print(line, file=sys.stderr)
+        print("golden data: " + (f"{len(problems)} differences" if problems
+                                 else f"{traces_name()}, {step_digests_name()} and the "
+                                      "readings digests match"))
+        return 1 if problems else 0
+    print(f"wrote {write_traces(HERE)}")
+    path = HERE / step_digests_name()
+    path.write_text(json.dumps(make_step_digests(), indent=1, sort_keys=True) + "\n")
     print(f"wrote {path}")
+    print("tests/test_ebrl_readings.py, BEFORE = {")
+    for name, (actions, state) in make_digests().items():
+        print(f'    "{name}": ("{actions}",\n{" " * (len(name) + 9)}"{state}"),')
+    print("}")
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    sys.exit(main())
