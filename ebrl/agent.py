@@ -112,15 +112,19 @@ class Agent:
             obs=np.zeros(n), action=np.zeros(self.action_dim))
         #: The agent as one record for compiled code (ebrl.kernels.AgentRecord): the
         #: config's numbers, the stream, the arrays above, the counters.
-        self.record = kernels.AgentRecord(
-            self.rng, float(c.exploration_rate), float(c.alpha), float(c.policy_threshold),
-            float(c.variance_floor), float(c.initial_utility), float(c.initial_reliability),
-            float(c.discount), float(c.utility_cutoff), float(c.reliability_rate),
-            float(c.time_discount), reading_code("eq7_scope", c.eq7_scope),
-            reading_code("forgetting", c.forgetting), c.eq7_scope == "decided_only",
-            c.episode == "continuing", c.recall_at_trial_end == "keep",
-            *(getattr(self.memory, name) for name in kernels.AGENT_ARRAYS),
-            False, 0, -1, -1, 0, 0, 0, -1)
+        self.record = kernels.AgentRecord.build(
+            rng=self.rng, exploration=float(c.exploration_rate), alpha=float(c.alpha),
+            threshold=float(c.policy_threshold), floor=float(c.variance_floor),
+            initial_utility=float(c.initial_utility),
+            initial_reliability=float(c.initial_reliability), discount=float(c.discount),
+            cutoff=float(c.utility_cutoff), rho=float(c.reliability_rate),
+            decay=float(c.time_discount), eq7_scope=reading_code("eq7_scope", c.eq7_scope),
+            forgetting=reading_code("forgetting", c.forgetting),
+            flag_decisions=c.eq7_scope == "decided_only", continuing=c.episode == "continuing",
+            keep_recall=c.recall_at_trial_end == "keep",
+            **{name: getattr(self.memory, name) for name in kernels.AGENT_ARRAYS},
+            pending=False, size=0, tail=-1, referred=-1, steps=0, memory_decisions=0,
+            fallback_decisions=0, decider=-1)
         # The compiled fallbacks (ebrl.intrinsic's) draw from the agent's stream.
         self.fallback_record = None
         if getattr(fallback, "record", None) is not None:
@@ -133,30 +137,32 @@ class Agent:
         self._action = self.memory.action
 
     # -- read-outs -----------------------------------------------------------------
-    def _counter(index, doc):
-        """A read-only property of the record's counter `index` (kernels.counters)."""
+    def _counter(name, doc):
+        """A read-only property of the record's counter `name` (kernels.COUNTERS)."""
+        index = kernels.COUNTERS.index(name)
         return property(lambda self: kernels.counters(self.record)[index], doc=doc)
 
-    size = _counter(0, "Stored memory elements.")
-    tail = _counter(1, "The current episode's latest element (-1: none).")
-    referred = _counter(2, "The trial's latest element used for a memory decision (eq 7's "
-                           "start; -1: none).")
-    steps = _counter(3, "Steps learnt so far.")
-    memory_decisions = _counter(4, "Actions the memory chose (eq 5).")
-    fallback_decisions = _counter(5, "Actions the fallback chose.")
+    size = _counter("size", "Stored memory elements.")
+    tail = _counter("tail", "The current episode's latest element (-1: none).")
+    referred = _counter("referred", "The trial's latest element used for a memory decision "
+                                    "(eq 7's start; -1: none).")
+    steps = _counter("steps", "Steps learnt so far.")
+    memory_decisions = _counter("memory_decisions", "Actions the memory chose (eq 5).")
+    fallback_decisions = _counter("fallback_decisions", "Actions the fallback chose.")
+    _decider = _counter("decider", "Who chose the last action (an index of DECIDERS; -1: none).")
     del _counter
 
     @property
     def decision(self) -> str | None:
         """Who chose the last act's action, one of DECIDERS (videos colour by it); a
         Python fallback without a choice reads "fallback"; None before any act."""
-        code = kernels.counters(self.record)[6]
+        code = self._decider
         return DECIDERS[code] if code >= 0 else self._python_choice
 
     @property
     def used_memory(self) -> bool:
         """True when the memory chose the last act's action."""
-        return kernels.counters(self.record)[6] == kernels.MEMORY
+        return self._decider == kernels.MEMORY
 
     _python_choice = None
 

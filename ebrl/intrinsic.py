@@ -17,9 +17,9 @@ import ctypes.util
 import numpy as np
 from llvmlite import binding
 from numba import njit, types
-from numba.experimental import structref
 
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from ebrl import records
 from ebrl.config import READINGS, check_reading
 from ebrl.kernels import INTRINSIC, RANDOM
 
@@ -157,13 +157,12 @@ def fallback_act(kind, ranges, random, add, theta, last, out):
 
 # -- a fallback as one named record ------------------------------------------------------
 
-@structref.register
-class FallbackStateType(types.StructRef):
-    def preprocess_fields(self, fields):
-        return tuple((name, types.unliteral(typ)) for name, typ in fields)
+FALLBACK_FIELDS = ("kind", "rate", "sd", "uniform", "add", "theta", "last", "random", "choice",
+                   "rng")
 
 
-class FallbackRecord(structref.StructRefProxy):
+@records.record(*FALLBACK_FIELDS)
+class FallbackRecord(records.Record):
     """A fallback (RandomWalk or Intrinsic) as the record fallback_step works on: its
     kind (WALK, TURNING, ACCELERATING, GIVEN), random share and spread, whether its
     random action is uniform over (-1, 1) instead (random_demand), the
@@ -171,21 +170,14 @@ class FallbackRecord(structref.StructRefProxy):
     without hold), scratch for the random action, who chose its last action (RANDOM or
     INTRINSIC, -1 before any), and the random stream its Python calls draw from."""
 
-    def __new__(cls, *args):
-        # numba's own constructor (StructRefProxy.__new__) compiles in every
-        # process; this one is cached on disk, as the kernels are
-        return _new_fallback_record(*args)
-
-
-FALLBACK_FIELDS = ("kind", "rate", "sd", "uniform", "add", "theta", "last", "random", "choice",
-                   "rng")
-structref.define_proxy(FallbackRecord, FallbackStateType, list(FALLBACK_FIELDS))
-
 
 @njit(cache=True)
-def _new_fallback_record(*args):
-    """FallbackRecord(*args), compiled once and cached (its __new__)."""
-    return FallbackRecord(*args)
+def _new_fallback_record(*values):
+    """FallbackRecord's cached constructor (ebrl.records)."""
+    return FallbackRecord(*values)
+
+
+FallbackRecord.constructor = _new_fallback_record
 
 
 @njit(cache=True)
@@ -246,15 +238,17 @@ class _Fallback:
     _choices = (None, "intrinsic", "random")
 
     def _record(self, rate, sd, add, last, uniform=False):
-        self._args = (self._kind, float(rate), float(sd), bool(uniform), bool(add), THETA,
-                      _NOTHING if last is None else last, np.zeros(self.action_dim), -1)
+        self._fields = dict(kind=self._kind, rate=float(rate), sd=float(sd),
+                            uniform=bool(uniform), add=bool(add), theta=THETA,
+                            last=_NOTHING if last is None else last,
+                            random=np.zeros(self.action_dim), choice=-1)
         self.bind(np.random.default_rng(0))
 
     def bind(self, rng):
         """Binds the record to rng, the stream its Python calls draw from (a new record
         only for a new stream; the agent binds its own at construction)."""
         if getattr(self, "_bound", None) is not rng:
-            self.record = FallbackRecord(*self._args, rng)
+            self.record = FallbackRecord.build(**self._fields, rng=rng)
             self._bound = rng
 
     @property

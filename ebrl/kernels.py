@@ -28,10 +28,10 @@ EQ7_DECIDED_ONLY) and forgetting (FORGET_LEAST_RELIABLE, FORGET_OLDEST). The epi
 and recall-table switches act at a trial's end, in ebrl.Agent.end_episode.
 """
 import numpy as np
-from numba import njit, types
-from numba.experimental import structref
+from numba import njit
 
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from ebrl import records
 
 INVALID = -2  # act's answer for an observation that is not finite or whose square overflows
 FALLBACK = -1  # act_memory's answer when the fallback is to choose the action
@@ -311,27 +311,6 @@ def learn(x, action, reward, step, size, tail, referred, inputs, sums, variance,
 
 # -- the agent as one named record ------------------------------------------------------
 
-@structref.register
-class AgentStateType(types.StructRef):
-    def preprocess_fields(self, fields):
-        return tuple((name, types.unliteral(typ)) for name, typ in fields)
-
-
-class AgentRecord(structref.StructRefProxy):
-    """ebrl.Agent's whole state as one record that compiled code takes as it is: the
-    memory's arrays (as the module docstring lays them out), the recall table, the
-    config's numbers, the agent's random stream (its numpy Generator, drawn in place),
-    the last act's input and action until learn stores them, and the counters.
-    Agent.act and Agent.learn call act_memory / learn_step on it, and a compiled loop
-    (experiments.running.fused) iterates the same functions on the same record. Python
-    reads its counters through `counters`; its arrays are the caller's own (shared)."""
-
-    def __new__(cls, *args):
-        # numba's own constructor (StructRefProxy.__new__) compiles in every
-        # process; this one is cached on disk, as the kernels are
-        return _new_agent_record(*args)
-
-
 #: The record's fields, in the constructor's order.
 AGENT_FIELDS = (
     # the stream and the config's numbers (floats, so one compiled version serves all)
@@ -351,23 +330,40 @@ AGENT_FIELDS = (
     # chose the last action (an index of DECIDERS)
     "size", "tail", "referred", "steps", "memory_decisions", "fallback_decisions", "decider",
 )
-structref.define_proxy(AgentRecord, AgentStateType, list(AGENT_FIELDS))
+
+
+@records.record(*AGENT_FIELDS)
+class AgentRecord(records.Record):
+    """ebrl.Agent's whole state as one record that compiled code takes as it is: the
+    memory's arrays (as the module docstring lays them out), the recall table, the
+    config's numbers, the agent's random stream (its numpy Generator, drawn in place),
+    the last act's input and action until learn stores them, and the counters.
+    Agent.act and Agent.learn call act_memory / learn_step on it, and a compiled loop
+    (experiments.running.fused) iterates the same functions on the same record. Python
+    reads its counters by name through `counters` (COUNTERS); its arrays are the caller's own (shared)."""
 
 
 @njit(cache=True)
-def _new_agent_record(*args):
-    """AgentRecord(*args), compiled once and cached (its __new__)."""
-    return AgentRecord(*args)
+def _new_agent_record(*values):
+    """AgentRecord's cached constructor (ebrl.records)."""
+    return AgentRecord(*values)
+
+
+AgentRecord.constructor = _new_agent_record
 
 
 #: The record's arrays, in order (AGENT_FIELDS from "group_of" to "action").
 AGENT_ARRAYS = AGENT_FIELDS[AGENT_FIELDS.index("group_of"): AGENT_FIELDS.index("pending")]
 
 
+#: The record's counters, in the order `counters` returns them.
+COUNTERS = ("size", "tail", "referred", "steps", "memory_decisions", "fallback_decisions",
+            "decider")
+
+
 @njit(cache=True)
 def counters(s):
-    """The record's counters: (size, tail, referred, steps, memory decisions, fallback
-    decisions, decider)."""
+    """The record's counters, in COUNTERS' order."""
     return (s.size, s.tail, s.referred, s.steps, s.memory_decisions, s.fallback_decisions,
             s.decider)
 

@@ -21,11 +21,11 @@ tests/test_fused.py checks the two alike, step for step, for every registered ro
 both conditions.
 """
 import numpy as np
-from numba import njit, types
-from numba.experimental import structref
+from numba import njit
 
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl import kernels as agent_kernels
+from ebrl import records
 from ebrl.agent import act_step, invalid_observation, trial_end
 from tasks.kernels import bindings, body
 from tasks.kernels import steps as drive_steps
@@ -38,13 +38,9 @@ GOAL, BUDGET, REFILL, FAILED, INVALID = range(5)
 MODALITIES = ("range", "velocity")
 
 
-@structref.register
-class SensingType(types.StructRef):
-    def preprocess_fields(self, fields):
-        return tuple((name, types.unliteral(typ)) for name, typ in fields)
-
-
-class Sensing(structref.StructRefProxy):
+@records.record("codes", "velocity", "layout", "scale", "obs", "range_at", "u", "z",
+                "sensor_noise", "vz", "velocity_noise", "env_action", "substeps", "status")
+class Sensing(records.Record):
     """The loop's own record: the last sensor values (codes, velocity), the observation's
     layout (an index of MODALITIES per part) and the range codes' scale into it, the
     agent's input (obs) with the ranges' offset in it, the step's draws (u, z, vz) and
@@ -52,9 +48,13 @@ class Sensing(structref.StructRefProxy):
     MuJoCo status."""
 
 
-structref.define_proxy(Sensing, SensingType, [
-    "codes", "velocity", "layout", "scale", "obs", "range_at", "u", "z", "sensor_noise", "vz",
-    "velocity_noise", "env_action", "substeps", "status"])
+@njit(cache=True)
+def _new_sensing(*values):
+    """Sensing's cached constructor (ebrl.records)."""
+    return Sensing(*values)
+
+
+Sensing.constructor = _new_sensing
 
 
 @njit(cache=True)
@@ -127,9 +127,12 @@ class Loop:
         #: The loop's record (Sensing): the last sensor values, the agent's input, draws.
         self._codes, self._velocity, self._obs = (np.zeros(n_codes), np.zeros(2),
                                                   np.zeros(agent.obs_dim))
-        self.io = Sensing(self._codes, self._velocity, layout, navigation.READING_SCALE,
-                          self._obs, range_at, u, z, float(task.sensor_noise), vz,
-                          float(task.velocity_noise), np.zeros(agent.action_dim), 0, 0)
+        self.io = Sensing.build(
+            codes=self._codes, velocity=self._velocity, layout=layout,
+            scale=navigation.READING_SCALE, obs=self._obs, range_at=range_at, u=u, z=z,
+            sensor_noise=float(task.sensor_noise), vz=vz,
+            velocity_noise=float(task.velocity_noise), env_action=np.zeros(agent.action_dim),
+            substeps=0, status=0)
 
     @property
     def last_observation(self):
