@@ -171,13 +171,7 @@ class FallbackRecord(records.Record):
     INTRINSIC, -1 before any), and the random stream its Python calls draw from."""
 
 
-@njit(cache=True)
-def _new_fallback_record(*values):
-    """FallbackRecord's cached constructor (ebrl.records)."""
-    return FallbackRecord(*values)
-
-
-FallbackRecord.constructor = _new_fallback_record
+FallbackRecord.constructor = njit(cache=True)(lambda *values: FallbackRecord(*values))
 
 
 @njit(cache=True)

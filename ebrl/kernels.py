@@ -343,13 +343,7 @@ class AgentRecord(records.Record):
     reads its counters by name through `counters` (COUNTERS); its arrays are the caller's own (shared)."""
 
 
-@njit(cache=True)
-def _new_agent_record(*values):
-    """AgentRecord's cached constructor (ebrl.records)."""
-    return AgentRecord(*values)
-
-
-AgentRecord.constructor = _new_agent_record
+AgentRecord.constructor = njit(cache=True)(lambda *values: AgentRecord(*values))
 
 
 #: The record's arrays, in order (AGENT_FIELDS from "group_of" to "action").

@@ -10,21 +10,18 @@ declared as
     class Stream(records.Record):
         '''What it holds.'''
 
-    @njit(cache=True)
-    def _new_stream(*values):
-        return Stream(*values)
-
-    Stream.constructor = _new_stream
+    Stream.constructor = njit(cache=True)(lambda *values: Stream(*values))
 
 and built by name, ``Stream.build(buffer=..., cursor=0, has_gauss=0, gauss=0.0)``: a
 missing or unknown name is a TypeError naming it. Fields are read by name in compiled
 code (``st.cursor``) and, from Python, through small compiled getters.
 
-Why each record keeps its own three-line constructor: numba's own (StructRefProxy's
-``__new__``) compiles anew in every process (about 0.3 s a record, in every worker),
-while an ``@njit(cache=True)`` function is loaded from the on-disk cache; and numba keys
-that cache on the function's module, name and line, so one constructor generated here
-for every record would share one cache entry among records whose field types match.
+Why each record states its own constructor, a line in its own module: numba's own
+(StructRefProxy's ``__new__``) compiles anew in every process (about 0.3 s a record, in
+every worker), while an ``@njit(cache=True)`` function is loaded from the on-disk cache;
+and numba keys that cache on the function's module, name and line, so one constructor
+made here for every record would share one cache entry among records whose field types
+match.
 """
 import sys
 

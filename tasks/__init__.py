@@ -3,7 +3,10 @@
 `tasks.load(robot, ...)` takes a registered robot name (`tasks.ROBOTS`) or a path to a
 robot file with `drive="two_wheel"` or `drive="floating"`.
 """
+from __future__ import annotations
+
 import dataclasses
+import os
 
 import models  # first: it imports MuJoCo and dm_control with rendering off (tasks.render)
 
@@ -39,12 +42,12 @@ class Environment(control.Environment):
     compiled = True
 
     @property
-    def steps_compiled(self):
+    def steps_compiled(self) -> bool:
         """True when step() runs the task's compiled step (tasks.kernels.steps.step): not
         switched off, and the observation not flattened (dm_control's hooks do that)."""
         return self.compiled and not self._flat_observation
 
-    def step(self, action):
+    def step(self, action) -> dm_env.TimeStep:
         if self._reset_next_step or not self.steps_compiled:
             return super().step(action)
         reward, observation, discount = self._task.compiled_step(action, self._physics)
@@ -54,7 +57,7 @@ class Environment(control.Environment):
             return dm_env.TimeStep(dm_env.StepType.LAST, reward, discount, observation)
         return dm_env.TimeStep(dm_env.StepType.MID, reward, 1.0, observation)
 
-    def advance(self, steps, goal):
+    def advance(self, steps: int, goal: bool) -> bool:
         """Counts `steps` agent steps run by compiled code (this step() or a compiled
         loop); the episode ends at the goal or at the time limit, and the next step()
         then resets. Returns True when it ended. (dm_control's Environment keeps these
@@ -66,14 +69,14 @@ class Environment(control.Environment):
             self._reset_next_step = True
         return last
 
-    def close(self):
+    def close(self) -> None:
         physics, self._physics = getattr(self, "_physics", None), None
         if physics is not None:
             render.release(physics)
             physics.free()
 
 
-def compile_robot(entry, config=TaskConfig()):
+def compile_robot(entry: Robot, config: TaskConfig = TaskConfig()) -> tuple[mujoco.MjModel, mujoco.MjSpec]:
     """(MjModel, MjSpec) of the room with the registry entry's robot, and the task
     config's changes to the model: the robot's radius, the floating bump's walls."""
     robot = None
@@ -95,7 +98,8 @@ def _source(entry):
     return f"mount {entry.mount.path}" if entry.mount is not None else f"robot file {entry.model}"
 
 
-def load(robot, *, drive=None, seed=None, config=None, **fields):
+def load(robot: str | os.PathLike | Robot, *, drive: str | None = None, seed: int | None = None,
+         config: TaskConfig | None = None, **fields) -> Environment:
     """The navigation environment for `robot`: a name in tasks.ROBOTS or tasks.MOUNTS, a
     path to a mount file (.toml, tasks.mount), or a path to a robot file with drive
     "two_wheel" or "floating". config: a TaskConfig (default: the

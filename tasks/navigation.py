@@ -148,12 +148,13 @@ class Physics(dm_mujoco.Physics):
         #: Seconds of simulated time per agent step; set by the task.
         self.step_seconds = 1.0
         # The body's part of the drive's record (tasks.kernels.body.BODY_FIELDS): the
-        # structs' addresses (the bindings' _address: no public way to them), views of the
-        # ints the kernels touch, MuJoCo's arrays; the drive's Physics adds its own parts.
+        # structs' addresses, views of the ints the kernels touch, MuJoCo's arrays; the
+        # drive's Physics adds its own parts.
         (x0, y0), (x1, y1) = self.goal_box
+        m_address, d_address = bindings.addresses(mjm, data.ptr)
         #: The body's values of the drive's record, by name.
         self.body = dict(
-            m=mjm._address, d=data.ptr._address, flags=bindings.disable_flags(mjm),
+            m=m_address, d=d_address, flags=bindings.disable_flags(mjm),
             bad_qacc=bindings.warning_count(data.ptr, mujoco.mjtWarning.mjWARN_BADQACC),
             ctrl=self._ctrl, qpos=self._qpos, qvel=self._qvel, act=self._act,
             sensordata=self._sensordata, xpos=self._xpos, xmat=self._xmat,

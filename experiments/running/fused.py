@@ -48,13 +48,7 @@ class Sensing(records.Record):
     MuJoCo status."""
 
 
-@njit(cache=True)
-def _new_sensing(*values):
-    """Sensing's cached constructor (ebrl.records)."""
-    return Sensing(*values)
-
-
-Sensing.constructor = _new_sensing
+Sensing.constructor = njit(cache=True)(lambda *values: Sensing(*values))
 
 
 @njit(cache=True)

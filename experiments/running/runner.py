@@ -234,7 +234,7 @@ def _pool(specs, workers, done):
             except BrokenProcessPool:  # a worker died since the last wait
                 queue.append(spec)
                 broken = True
-            processes.update(getattr(pool, "_processes", None) or {})
+            processes.update(worker_processes(pool))
 
     try:
         fill()
@@ -277,12 +277,19 @@ def _submit(pool, spec):
         signal.signal(signal.SIGINT, previous)
 
 
+def worker_processes(pool):
+    """{pid: process} of a ProcessPoolExecutor's workers: the one read of
+    concurrent.futures' private `_processes` (Python 3.10 to 3.13 have no public way to
+    the workers; 3.14's terminate_workers ends them but does not name them)."""
+    return dict(getattr(pool, "_processes", None) or {})
+
+
 def _stop(pool):
     """Terminates the pool's worker processes and shuts it down without waiting for
     the runs in flight (lost: their folders hold no run.json, so a rerun redoes them)."""
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C while stopping
-    processes = list((getattr(pool, "_processes", None) or {}).values())
+    processes = list(worker_processes(pool).values())
     for p in processes:
         p.terminate()
     pool.shutdown(wait=False, cancel_futures=True)

@@ -8,8 +8,7 @@ because they hold no addresses. Every kernel is ``@njit(cache=True)`` with no fa
 each floating-point operation runs as written, in the same order (same bits, tested).
 
 What a kernel reads and writes of MuJoCo's structs:
-    m, d          the mjModel and mjData addresses (MjModel._address, MjData._address:
-                  the bindings' only way to them, read in tasks.navigation)
+    m, d          the mjModel and mjData addresses (`addresses`)
     flags         an int32 view of m->opt.disableflags (the sensor stage is switched on
                   only for mj_sensorPos: tasks.sensing.ranges)
     bad_qacc      an int32 view of d->warning[mjWARN_BADQACC].number
@@ -75,6 +74,14 @@ OK, UNSTABLE, TIPPED, NOT_FINITE = 0, 1, 2, 3
 
 OBJ_BODY = int(mujoco.mjtObj.mjOBJ_BODY)
 SENSOR_BIT = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
+
+
+def addresses(model, data):
+    """The mjModel's and mjData's addresses (mujoco.MjModel, mujoco.MjData): the one read
+    of the bindings' private `_address`, which the mujoco package has as its only way to
+    them (its ctypes views of the structs' arrays start inside the structs, not at
+    them)."""
+    return model._address, data._address
 
 
 # -- finding the two ints of MuJoCo's structs that have no array view -----------------

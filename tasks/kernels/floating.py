@@ -42,13 +42,7 @@ class FloatingDrive(records.Record):
     """The floating robot's record (the fields' comments)."""
 
 
-@njit(cache=True)
-def _new_floating(*values):
-    """FloatingDrive's cached constructor (ebrl.records)."""
-    return FloatingDrive(*values)
-
-
-FloatingDrive.constructor = _new_floating
+FloatingDrive.constructor = njit(cache=True)(lambda *values: FloatingDrive(*values))
 
 
 @njit(cache=True)

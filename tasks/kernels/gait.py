@@ -39,13 +39,7 @@ class GaitDrive(records.Record):
     """The gait's record (the fields' comments)."""
 
 
-@njit(cache=True)
-def _new_gait(*values):
-    """GaitDrive's cached constructor (ebrl.records)."""
-    return GaitDrive(*values)
-
-
-GaitDrive.constructor = _new_gait
+GaitDrive.constructor = njit(cache=True)(lambda *values: GaitDrive(*values))
 
 
 @njit(cache=True)

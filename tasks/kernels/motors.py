@@ -13,7 +13,7 @@ from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a ker
 from ebrl import records
 from tasks.kernels import bindings, two_wheel as family
 from tasks.kernels.body import BODY_FIELDS
-from tasks.kernels.wheels import PLAN_FIELDS
+from tasks.kernels.wheels import PLAN_FIELDS, move_angles, turn_angles
 
 
 @records.record(*BODY_FIELDS, *family.FAMILY_FIELDS, *PLAN_FIELDS, "wheel_q", "wheel_dof",
@@ -28,13 +28,7 @@ class MotorWheelDrive(records.Record):
     returns to."""
 
 
-@njit(cache=True)
-def _new_motor_wheels(*values):
-    """MotorWheelDrive's cached constructor (ebrl.records)."""
-    return MotorWheelDrive(*values)
-
-
-MotorWheelDrive.constructor = _new_motor_wheels
+MotorWheelDrive.constructor = njit(cache=True)(lambda *values: MotorWheelDrive(*values))
 
 
 @njit(cache=True)
@@ -109,16 +103,16 @@ def plan(s, left, right, n, ramp):
 
 @njit(cache=True)
 def turn(s, angle, leftover):
-    """Turns by `angle` rad counter-clockwise: the wheels by -+angle * half track / radius."""
-    w = angle * s.half_track / s.wheel_radius
-    return plan(s, -w, w, s.n_turn, s.ramp_turn)
+    """Turns by `angle` rad counter-clockwise over the turn phase (wheels.turn_angles)."""
+    left, right = turn_angles(s, angle)
+    return plan(s, left, right, s.n_turn, s.ramp_turn)
 
 
 @njit(cache=True)
 def move(s, distance):
-    """Moves `distance` units forward: both wheels by distance / radius."""
-    w = distance * s.unit / s.wheel_radius
-    return plan(s, w, w, s.n_move, s.ramp_move)
+    """Moves `distance` units forward over the move phase (wheels.move_angles)."""
+    left, right = move_angles(s, distance)
+    return plan(s, left, right, s.n_move, s.ramp_move)
 
 
 @njit(cache=True)

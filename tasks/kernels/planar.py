@@ -15,13 +15,7 @@ class PlanarDrive(records.Record):
     """The planar base's record: the body, the family's fields, the two servos' ids."""
 
 
-@njit(cache=True)
-def _new_planar(*values):
-    """PlanarDrive's cached constructor (ebrl.records)."""
-    return PlanarDrive(*values)
-
-
-PlanarDrive.constructor = _new_planar
+PlanarDrive.constructor = njit(cache=True)(lambda *values: PlanarDrive(*values))
 
 
 @njit(cache=True)

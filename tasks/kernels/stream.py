@@ -30,13 +30,7 @@ class Stream(records.Record):
     index, and legacy_gauss's cached value (has_gauss, gauss)."""
 
 
-@njit(cache=True)
-def _new_stream(*values):
-    """Stream's cached constructor (ebrl.records)."""
-    return Stream(*values)
-
-
-Stream.constructor = _new_stream
+Stream.constructor = njit(cache=True)(lambda *values: Stream(*values))
 
 
 @njit(cache=True)

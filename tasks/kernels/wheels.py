@@ -32,13 +32,7 @@ class WheelDrive(records.Record):
     their activations' (act) and the wheel hinges' qpos addresses."""
 
 
-@njit(cache=True)
-def _new_wheels(*values):
-    """WheelDrive's cached constructor (ebrl.records)."""
-    return WheelDrive(*values)
-
-
-WheelDrive.constructor = _new_wheels
+WheelDrive.constructor = njit(cache=True)(lambda *values: WheelDrive(*values))
 
 
 @njit(cache=True)
@@ -59,17 +53,33 @@ def phase(s, left, right, n, ramp):
 
 
 @njit(cache=True)
-def turn(s, angle, leftover):
-    """Turns by `angle` rad counter-clockwise: the wheels by -+angle * half track / radius."""
+def turn_angles(s, angle):
+    """The wheels' angles (left, right) that turn the body by `angle` rad counter-clockwise:
+    -+angle * half track / radius."""
     w = angle * s.half_track / s.wheel_radius
-    return phase(s, -w, w, s.n_turn, s.ramp_turn)
+    return -w, w
+
+
+@njit(cache=True)
+def move_angles(s, distance):
+    """The wheels' angles (left, right) that move the body `distance` units forward: both
+    distance / radius."""
+    w = distance * s.unit / s.wheel_radius
+    return w, w
+
+
+@njit(cache=True)
+def turn(s, angle, leftover):
+    """Turns by `angle` rad counter-clockwise over the turn phase."""
+    left, right = turn_angles(s, angle)
+    return phase(s, left, right, s.n_turn, s.ramp_turn)
 
 
 @njit(cache=True)
 def move(s, distance):
-    """Moves `distance` units forward: both wheels by distance / radius."""
-    w = distance * s.unit / s.wheel_radius
-    return phase(s, w, w, s.n_move, s.ramp_move)
+    """Moves `distance` units forward over the move phase."""
+    left, right = move_angles(s, distance)
+    return phase(s, left, right, s.n_move, s.ramp_move)
 
 
 @njit(cache=True)
