@@ -29,6 +29,10 @@ pass; a move short by more than two_wheel.BLOCKED_TOLERANCE at its timeout was b
 
 A fall is a PhysicsError (tasks.navigation: the base tilted past max_tilt degrees), as for
 any free-joint robot; a run that raises one is a failed run.
+
+The walking itself is compiled (tasks.kernels.gait: the CPG, the PD loops and the
+feedback, as the two-wheel family's realisation, tasks.kernels.two_wheel.act); this module
+reads the legs' shares from the model and gives the episode's settings.
 """
 import math
 

@@ -113,7 +113,7 @@ class Physics(navigation.Physics):
 class WheelPlan(navigation.Physics):
     """Two wheel hinges rolling on the floor: their radius and track, and the ramps of
     the episode's phases. WheelPhysics drives them through servos added on the wheels,
-    tasks.two_wheel.motors.MotorWheelPhysics through the file's own motors."""
+    MotorWheelPhysics through the file's own motors."""
 
     def _wheel_geometry(self, joints):
         """The wheel radius and half the track, from the two wheel hinges (joint ids):
@@ -133,7 +133,7 @@ class WheelPlan(navigation.Physics):
 
 class WheelPhysics(WheelPlan):
     """Two wheel hinges, ``left_wheel`` and ``right_wheel``, each under an
-    integrated-velocity servo (the module's docstring)."""
+    integrated-velocity servo (tasks.kernels.wheels: the phases and the halt)."""
 
     Record = WheelDrive
 
@@ -153,8 +153,8 @@ class WheelPhysics(WheelPlan):
 
 
 class MotorWheelPhysics(WheelPlan):
-    """Two wheel hinges (``left``, ``right``) turned through the file's own motors (the
-    module's docstring)."""
+    """Two wheel hinges (``left``, ``right``) turned through the file's own motors, a PD
+    loop on the wheels' angles solved for the motors' controls (tasks.kernels.motors)."""
 
     Record = MotorWheelDrive
     #: Set by motor_wheel_physics from the mount: its motors' count and the PD gains
