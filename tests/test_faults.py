@@ -461,8 +461,8 @@ def test_a_killed_writers_temporary_file_is_removed_by_the_next_write(tmp_path):
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
     dead.wait()
     alive = os.getppid()  # pytest's parent: running while this test runs
-    left = tmp_path / f"{results._tmp_prefix(path, dead.pid)}abc.tmp"
-    live = tmp_path / f"{results._tmp_prefix(path, alive)}def.tmp"
+    left = tmp_path / f"{results.tmp_prefix(path, dead.pid)}abc.tmp"
+    live = tmp_path / f"{results.tmp_prefix(path, alive)}def.tmp"
     other = tmp_path / f".run.json.another-host.{dead.pid}.ghi.tmp"
     for f in (left, live, other):
         f.write_text("half")

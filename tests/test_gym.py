@@ -65,10 +65,10 @@ def test_reset_with_a_seed_reproduces_a_trajectory(env_id):
             out.append(obs["range"].copy())
         return np.array(out)
 
-    timer = bindings._TIMER_CALLBACK.value  # step turns MuJoCo's timers off, then back on
+    timer = bindings.TIMER_CALLBACK.value  # step turns MuJoCo's timers off, then back on
     a, b = gymnasium.make(env_id), gymnasium.make(env_id)
     first = rollout(a, 7)
-    assert bindings._TIMER_CALLBACK.value == timer is not None
+    assert bindings.TIMER_CALLBACK.value == timer is not None
     rollout(a, 8)  # something else in between
     assert np.array_equal(first, rollout(a, 7)) and np.array_equal(first, rollout(b, 7))
     assert not np.array_equal(first, rollout(b, 8))

@@ -132,7 +132,7 @@ def test_stage_timers_off_changes_nothing_but_the_timers(robot):
     """MuJoCo's timer callback (set by the mujoco package) fills mjData.timer and nothing
     else: with it off the same steps give the same state bit for bit, the timers do not
     advance, and the callback is back after the block."""
-    before = bindings._TIMER_CALLBACK.value
+    before = bindings.TIMER_CALLBACK.value
     assert before is not None  # the mujoco package sets one at import
     runs = []
     for off in (False, True):
@@ -143,14 +143,14 @@ def test_stage_timers_off_changes_nothing_but_the_timers(robot):
         start = position.duration
         with bindings.stage_timers_off() if off else contextlib.nullcontext():
             if off:
-                assert bindings._TIMER_CALLBACK.value is None
+                assert bindings.TIMER_CALLBACK.value is None
             obs = [env.step(rng.uniform(-1, 1, env.action_spec().shape)).observation
                    for _ in range(200)]
         timed = position.duration - start
         runs.append((obs, env.physics.data.qpos.tobytes(), env.physics.data.qvel.tobytes(),
                      env.physics.robot_pose(), timed))
         env.close()
-    assert bindings._TIMER_CALLBACK.value == before
+    assert bindings.TIMER_CALLBACK.value == before
     (obs_on, *state_on, timed_on), (obs_off, *state_off, timed_off) = runs
     assert state_on == state_off
     for a, b in zip(obs_on, obs_off):

@@ -48,7 +48,7 @@ def test_shortest_path_goes_round_an_obstacle_at_the_radius():
                                          (30.0, 40.0, 0.0, 10.0), radius)
     assert length > math.hypot(28.0, 0.0)  # longer than through the box
     for p, q in zip(path[:-1], path[1:]):
-        assert optimal._segment_box_distance(p, q, box) >= radius - 1e-4
+        assert optimal.segment_box_distance(p, q, box) >= radius - 1e-4
     # over the box's top (y = 30) and no higher than its corner arc needs
     assert 30.0 + radius - 1e-3 <= path[:, 1].max() <= 30.0 + radius / math.cos(math.pi / 24) + 2e-3
 

@@ -23,7 +23,7 @@ import numpy as np
 ARC_POINTS = 6  # per rounded corner
 
 
-def _segment_box_distance(p, q, box):
+def segment_box_distance(p, q, box):
     """Distance between segment pq and the axis-aligned box (x0, x1, y0, y1)."""
     x0, x1, y0, y1 = box
     # Intersection: Liang-Barsky clip.
@@ -68,7 +68,7 @@ def shortest_path(start, field, obstacles, goal, radius):
             return False
         if min(p[1], q[1]) < fy0 - eps or max(p[1], q[1]) > fy1 + eps:
             return False
-        return all(_segment_box_distance(p, q, b) >= radius - 1e-4 for b in obstacles)
+        return all(segment_box_distance(p, q, b) >= radius - 1e-4 for b in obstacles)
 
     nodes = [start]
     for x0, x1, y0, y1 in obstacles:

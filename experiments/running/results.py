@@ -85,7 +85,7 @@ def write_error(path, e):
                       "the same command to finish")
 
 
-def _tmp_prefix(path, pid=None):
+def tmp_prefix(path, pid=None):
     """A temporary file's name before its random part: the file's, this host's and the
     writing process's, so that a later writer can tell a dead writer's leftover."""
     return f".{path.name}.{socket.gethostname()}.{os.getpid() if pid is None else pid}."
@@ -123,7 +123,7 @@ def atomic_file(path):
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         _remove_dead_writers(path)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=_tmp_prefix(path), suffix=".tmp")
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=tmp_prefix(path), suffix=".tmp")
         os.close(fd)
         tmp = pathlib.Path(tmp)
         os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp makes 0600; results are for sharing

@@ -37,7 +37,7 @@ binding.load_library_permanently(_LIBRARY[0])
 
 #: MuJoCo's timer callback, the C global mjcb_time of the library loaded above (one
 #: handle per process: dlopen gives the mujoco package's own).
-_TIMER_CALLBACK = ctypes.c_void_p.in_dll(ctypes.CDLL(_LIBRARY[0]), "mjcb_time")
+TIMER_CALLBACK = ctypes.c_void_p.in_dll(ctypes.CDLL(_LIBRARY[0]), "mjcb_time")
 
 
 class stage_timers_off:  # a class named as a function: `with stage_timers_off():`
@@ -52,11 +52,11 @@ class stage_timers_off:  # a class named as a function: `with stage_timers_off()
     __slots__ = ("_previous",)
 
     def __enter__(self):
-        self._previous = _TIMER_CALLBACK.value
-        _TIMER_CALLBACK.value = None
+        self._previous = TIMER_CALLBACK.value
+        TIMER_CALLBACK.value = None
 
     def __exit__(self, *exc):
-        _TIMER_CALLBACK.value = self._previous
+        TIMER_CALLBACK.value = self._previous
 
 
 _P = types.uintp  # a pointer, as an integer (the C ABI passes both in one register)
