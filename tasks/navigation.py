@@ -214,8 +214,7 @@ class Physics(dm_mujoco.Physics):
         A base turning on a hinge about z reports the hinge's angle, which is the frame's
         heading exactly (the frame's rotation matrix, made through a quaternion, rounds
         it in the last bits); any other base, its frame's x axis in the plane."""
-        return sensing.pose(self._xpos, self._xmat, self._qpos,
-                            -1 if self._qyaw is None else self._qyaw, self.unit)
+        return sensing.pose(self._xpos, self._xmat, self._qpos, self.body["qyaw"], self.unit)
 
     def tilt(self):
         """Angle in radians between the base's z axis and the vertical."""
