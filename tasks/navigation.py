@@ -229,8 +229,8 @@ class Physics(dm_mujoco.Physics):
         """Distance from the body surface along each beam, in units; inf where nothing is
         hit. Runs the sensor stage once, at the current state."""
         b = self.body
-        return sensing.ranges(b["m"], b["d"], b["flags"], self._sensordata, self._beams.start,
-                              self._beams.stop, 1.0 / self.unit, self.robot_radius)
+        return sensing.ranges(b["m"], b["d"], b["flags"], b["sensordata"], b["beam0"], b["beam1"],
+                              b["metres_to_units"], b["radius"])
 
     def render(self, height=240, width=320, camera_id=-1, scene_option=None,
                scene_callback=None):
@@ -254,8 +254,8 @@ class Physics(dm_mujoco.Physics):
         if nstep <= 0:
             return
         b = self.body
-        status = bindings.run(b["m"], b["d"], nstep, b["bad_qacc"], self._xmat,
-                              self._free is not None, self._min_cos_tilt)
+        status = bindings.run(b["m"], b["d"], nstep, b["bad_qacc"], b["xmat"], b["free"] != 0,
+                              b["min_cos_tilt"])
         self.substeps += nstep
         if status != bindings.OK:
             self.raise_for(status)
