@@ -122,9 +122,13 @@ class Agent:
             forgetting=reading_code("forgetting", c.forgetting),
             flag_decisions=c.eq7_scope == "decided_only", continuing=c.episode == "continuing",
             keep_recall=c.recall_at_trial_end == "keep",
+            eq7_signal=reading_code("eq7_signal", c.eq7_signal),
+            eq7_walk=reading_code("eq7_walk", c.eq7_walk),
+            cut_links=c.forgetting_link == "cut", past_only=c.recall_candidates == "past",
+            explore_random=c.exploration == "random", random_sd=float(c.random_sd),
             **{name: getattr(self.memory, name) for name in kernels.AGENT_ARRAYS},
-            pending=False, size=0, tail=-1, referred=-1, steps=0, memory_decisions=0,
-            fallback_decisions=0, decider=-1)
+            pending=False, expected=0.0, trial_start=0, size=0, tail=-1, referred=-1, steps=0,
+            memory_decisions=0, fallback_decisions=0, decider=-1)
         # The compiled fallbacks (ebrl.intrinsic's) draw from the agent's stream.
         self.fallback_record = None
         if getattr(fallback, "record", None) is not None:

@@ -61,6 +61,11 @@ class Config:
     eq9_dead_zone: str = _default("eq9_dead_zone")  # the fallback's (intrinsic.fallback_for)
     random_in_avoidance: str = _default("random_in_avoidance")  # likewise
     random_demand: str = _default("random_demand")  # likewise
+    eq7_signal: str = _default("eq7_signal")
+    eq7_walk: str = _default("eq7_walk")
+    forgetting_link: str = _default("forgetting_link")
+    recall_candidates: str = _default("recall_candidates")
+    exploration: str = _default("exploration")
 
     def __post_init__(self):
         for name in ("memory_size", "recall_size"):

@@ -21,7 +21,7 @@ from numba import njit, types
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl import records
 from ebrl.config import READINGS, check_reading
-from ebrl.kernels import INTRINSIC, RANDOM
+from ebrl.kernels import INTRINSIC, RANDOM, clip_unit
 
 THETA = 0.25  # eq 9's sensitivity threshold for the floating robot
 
@@ -91,16 +91,6 @@ def avoid_by_accelerating(ranges, theta=THETA, previous=None):
     if previous is None:
         return np.array([eq9(b_h, theta, 0.0), eq9(b_v, theta, 0.0)])
     return np.array([eq9(b_h, theta, float(previous[0])), eq9(b_v, theta, float(previous[1]))])
-
-
-@njit(cache=True)
-def clip_unit(a):
-    """a clipped to [-1, 1] in place, as np.clip."""
-    for i in range(a.shape[0]):
-        v = a[i]
-        v = v if v > -1.0 else -1.0
-        a[i] = v if v < 1.0 else 1.0
-    return a
 
 
 def _clip(a):

@@ -40,8 +40,13 @@ FALLBACK = -1  # act_memory's answer when the fallback is to choose the action
 #: memory would have taken. AgentState.decider holds the index, -1 before any act.
 DECIDERS = ("memory", "intrinsic", "random", "exploration")
 MEMORY, INTRINSIC, RANDOM, EXPLORATION = range(4)
+EXPLORED = -3  # act_memory's answer when its exploration step's random action is s.action
 EQ7_TO_START, EQ7_DECIDED_ONLY = 0, 1  # learn's eq7_scope
 FORGET_LEAST_RELIABLE, FORGET_OLDEST = 0, 1  # learn's forgetting
+EQ7_REWARD, EQ7_SURPRISE_MEASURE, EQ7_SURPRISE_RATE = 0, 1, 2  # eq7_signal
+EQ7_WHOLE, EQ7_DISCOUNTED, EQ7_CUT = 0, 1, 2  # eq7_walk
+#: recall_candidates "all": no element is too recent to be a candidate.
+NO_EXCLUSION = np.iinfo(np.int64).max
 
 
 @njit(cache=True)
@@ -88,6 +93,12 @@ def similarities(x, inputs, size, variance, group_of, group_size, group_weight, 
 
 @njit(cache=True)
 def recall(sim, size, nxt, table, table_w, alpha):
+    """recall_since with every stored element a candidate (recall_candidates "all")."""
+    recall_since(sim, size, nxt, table, table_w, alpha, nxt, NO_EXCLUSION)
+
+
+@njit(cache=True)
+def recall_since(sim, size, nxt, table, table_w, alpha, time, since):
     """The recall table (2.2) for the new input, whose similarities are sim[:size].
 
     eq 1: each entry moves along its forward link (an entry at the end of its episode
@@ -96,16 +107,23 @@ def recall(sim, size, nxt, table, table_w, alpha):
     element reached by an entry keeps the larger of the two. The N_r = len(table)
     candidates of largest weight form the new table, best first, equal weights to the
     lower element. sim is overwritten with the candidates' weights.
+
+    An element whose time stamp is `since` or later is no candidate, nor reached by an
+    entry (recall_candidates "past": since = the current trial's first step;
+    NO_EXCLUSION: none is excluded, and `time` is not read).
     """
+    exclude = since != NO_EXCLUSION
     for e in range(table.shape[0]):
         if table[e] >= 0:
             ahead = nxt[table[e]]
-            if ahead >= 0:
+            if ahead >= 0 and not (exclude and time[ahead] >= since):
                 sim[ahead] = max(sim[ahead], eq1(table_w[e], sim[ahead], alpha))
     table[:] = -1
     k, count = table.shape[0], 0
     lowest = -np.inf  # once the table is full: the weight a candidate must exceed
     for m in range(size):
+        if exclude and time[m] >= since:
+            continue
         w = sim[m]
         if count == k:
             if not w > lowest:
@@ -137,8 +155,9 @@ def policy(table, table_w, utility, threshold):
 
 @njit(cache=True)
 def act(x, size, inputs, variance, group_of, group_size, group_weight, sim, nxt,
-        table, table_w, utility, alpha, threshold):
-    """One act: eq 2-4 against the memory, the recall table (eq 1), eq 5's choice.
+        table, table_w, utility, alpha, threshold, time, since):
+    """One act: eq 2-4 against the memory, the recall table (eq 1; candidates stored
+    before `since` only, recall_since), eq 5's choice.
 
     Returns the element whose action eq 5 picks, -1 for none, or INVALID (with nothing
     changed) when x is not finite or its square overflows (the variance sums need x^2).
@@ -149,7 +168,7 @@ def act(x, size, inputs, variance, group_of, group_size, group_weight, sim, nxt,
     if not np.isfinite(square):
         return INVALID
     similarities(x, inputs, size, variance, group_of, group_size, group_weight, sim)
-    recall(sim, size, nxt, table, table_w, alpha)
+    recall_since(sim, size, nxt, table, table_w, alpha, time, since)
     return policy(table, table_w, utility, threshold)
 
 
@@ -175,15 +194,17 @@ def oldest(time, size):
 
 
 @njit(cache=True)
-def forget(k, inputs, sums, nxt, prev, table, table_w, tail, referred):
-    """Removes element k (2.1): its episode's neighbours are linked to each other, a
-    recall entry pointing at it is dropped, its input leaves the variance sums.
-    Returns (tail, referred), moved back to k's predecessor if either was k."""
+def forget(k, inputs, sums, nxt, prev, table, table_w, tail, referred, cut=False):
+    """Removes element k (2.1): its episode's neighbours are linked to each other (or,
+    with cut, forgetting_link "cut", unlinked: the episode ends at k's predecessor and
+    a new one starts at its successor), a recall entry pointing at it is dropped, its
+    input leaves the variance sums. Returns (tail, referred), moved back to k's
+    predecessor if either was k."""
     p, n = prev[k], nxt[k]
     if p >= 0:
-        nxt[p] = n
+        nxt[p] = -1 if cut else n
     if n >= 0:
-        prev[n] = p
+        prev[n] = -1 if cut else p
     nxt[k] = prev[k] = -1
     if tail == k:
         tail = p
@@ -235,13 +256,30 @@ def eq7_change(r, reward, rho):
 
 
 @njit(cache=True)
-def eq7(rel, prev, referred, reward, rho):
+def eq7(rel, prev, referred, reward, rho, time, discount, cutoff, walk):
     """eq 7, eq7_scope "to_start": along the backward links from the element used for
     the last memory decision to its episode's start: R += rho r (1 - R) when r > 0,
-    R += rho r R when r < 0."""
+    R += rho r R when r < 0.
+
+    walk (eq7_walk): EQ7_WHOLE, every element by the same r; EQ7_DISCOUNTED, element j
+    by r gamma^(t_ref - t_j) (gamma = discount, t_ref the referred element's time
+    stamp), as eq 6 discounts; EQ7_CUT, by r, stopping where gamma^(t_ref - t_j) falls
+    below cutoff, where eq 6 stops."""
     j = referred
+    if walk == EQ7_WHOLE:
+        while j >= 0:
+            rel[j] = eq7_change(rel[j], reward, rho)
+            j = prev[j]
+        return
+    t = time[referred]
     while j >= 0:
-        rel[j] = eq7_change(rel[j], reward, rho)
+        gain = discount ** (t - time[j])
+        if walk == EQ7_CUT:
+            if gain < cutoff:
+                break
+            rel[j] = eq7_change(rel[j], reward, rho)
+        else:
+            rel[j] = eq7_change(rel[j], reward * gain, rho)
         j = prev[j]
 
 
@@ -265,22 +303,26 @@ def time_discount(rel, size, rate):
 @njit(cache=True)
 def learn(x, action, reward, step, size, tail, referred, inputs, sums, variance, actions,
           utility, rel, time, nxt, prev, table, table_w, floor, initial_utility,
-          initial_reliability, discount, cutoff, rho, decay, decided, eq7_scope, forgetting):
+          initial_reliability, discount, cutoff, rho, decay, decided, eq7_scope, forgetting,
+          signal=np.nan, walk=EQ7_WHOLE, cut=False):
     """One learn: stores (x, action) as the episode's next element, in a free slot or,
-    when the memory is full, in a forgotten element's; then eq 6 and eq 7 if
-    reward != 0, then the time discount. Returns (size, tail, referred).
+    when the memory is full, in a forgotten element's; then eq 6 if reward != 0, eq 7
+    if its r (`signal`; NaN: the reward, eq7_signal "reward") != 0, then the time
+    discount. Returns (size, tail, referred).
 
     forgetting (2.1): FORGET_LEAST_RELIABLE forgets the least reliable element,
-    FORGET_OLDEST the oldest. eq7_scope: EQ7_TO_START applies eq 7 from `referred`
-    back to its episode's start (when referred >= 0), EQ7_DECIDED_ONLY to the elements
-    flagged in `decided`. A reused slot's decided flag is cleared.
+    FORGET_OLDEST the oldest; cut: the episode is cut at it (forget). eq7_scope:
+    EQ7_TO_START applies eq 7 from `referred` back to its episode's start (when
+    referred >= 0) with its walk (eq7), EQ7_DECIDED_ONLY to the elements flagged in
+    `decided`. A reused slot's decided flag is cleared.
     """
     if size == rel.shape[0]:
         if forgetting == FORGET_OLDEST:
             slot = oldest(time, size)
         else:
             slot = least_reliable(rel, size)
-        tail, referred = forget(slot, inputs, sums, nxt, prev, table, table_w, tail, referred)
+        tail, referred = forget(slot, inputs, sums, nxt, prev, table, table_w, tail, referred,
+                                cut)
         decided[slot] = False
     else:
         slot = size
@@ -301,10 +343,12 @@ def learn(x, action, reward, step, size, tail, referred, inputs, sums, variance,
     tail = slot
     if reward != 0.0:
         eq6(utility, prev, time, slot, reward, discount, cutoff)
+    r = reward if np.isnan(signal) else signal
+    if r != 0.0:
         if eq7_scope == EQ7_DECIDED_ONLY:
-            eq7_decided(rel, decided, size, reward, rho)
+            eq7_decided(rel, decided, size, r, rho)
         elif referred >= 0:
-            eq7(rel, prev, referred, reward, rho)
+            eq7(rel, prev, referred, r, rho, time, discount, cutoff, walk)
     time_discount(rel, size, decay)
     return size, tail, referred
 
@@ -318,13 +362,15 @@ AGENT_FIELDS = (
     "initial_reliability", "discount", "cutoff", "rho", "decay",
     # the readings acting here, as ints / flags (ebrl.config.READINGS)
     "eq7_scope", "forgetting", "flag_decisions", "continuing", "keep_recall",
+    "eq7_signal", "eq7_walk", "cut_links", "past_only", "explore_random", "random_sd",
     # eq 3's modalities
     "group_of", "group_size", "group_weight",
     # the memory (2.1), the variance sums (eq 2), the act's scratch, the recall table (2.2)
     "inputs", "sums", "variance", "sim", "actions", "utility", "rel", "time", "nxt", "prev",
     "decided", "table", "table_w",
-    # the last act's input and action, and whether learn has yet to store them
-    "obs", "action", "pending",
+    # the last act's input and action, whether learn has yet to store them, the reward
+    # its memory decision expected (eq7_signal), the current trial's first step
+    "obs", "action", "pending", "expected", "trial_start",
     # the counters: stored elements, the episode's latest element, the latest element used
     # for a decision (eq 7), steps learnt, decisions by memory and by the fallback, who
     # chose the last action (an index of DECIDERS)
@@ -363,15 +409,57 @@ def counters(s):
 
 
 @njit(cache=True)
+def expected_reward(s, element):
+    """The reward a memory decision for `element` expects (eq7_signal): eq 5's measure
+    min(W, U) of its recall entry (EQ7_SURPRISE_MEASURE; the first entry holding it), or
+    its utility as a reward per step, (1 - gamma) U (EQ7_SURPRISE_RATE: a steady reward r
+    each step sums by eq 6 to r / (1 - gamma))."""
+    if s.eq7_signal == EQ7_SURPRISE_RATE:
+        return (1.0 - s.discount) * s.utility[element]
+    for e in range(s.table.shape[0]):
+        if s.table[e] == element:
+            return eq5(s.table_w[e], s.utility[element])
+    return 0.0
+
+
+@njit(cache=True)
+def clip_unit(a):
+    """a clipped to [-1, 1] in place, as np.clip (Section 3.4's random action is clipped;
+    ebrl.intrinsic's fallbacks use it too)."""
+    for i in range(a.shape[0]):
+        v = a[i]
+        v = v if v > -1.0 else -1.0
+        a[i] = v if v < 1.0 else 1.0
+    return a
+
+
+@njit(cache=True)
+def eq7_signal(s, reward):
+    """eq 7's r for the step just taken (learn's `signal`): NaN for eq7_signal "reward"
+    (the reward itself); else the reward less what the step's memory decision expected
+    (s.expected), or the reward alone after a step the memory did not choose."""
+    if s.eq7_signal == EQ7_REWARD:
+        return np.nan
+    if s.decider == MEMORY:
+        return reward - s.expected
+    return reward
+
+
+@njit(cache=True)
 def act_memory(s, x):
     """One act's memory part on record s: eq 2-4 against the memory, the recall table
     (eq 1), eq 5's choice, then the exploration draw. x is kept as the act's input.
     Returns the element whose action s.action now holds (decider MEMORY), FALLBACK when
     the fallback is to fill s.action (decider EXPLORATION when the draw overruled the
-    memory, else left for the fallback's choice), or INVALID, with nothing changed, for
-    an x that is not finite or whose square overflows."""
+    memory, else left for the fallback's choice), EXPLORED when the draw overruled the
+    memory and exploration is "random" (s.action then holds Section 3.4's random action,
+    Gaussian with sd s.random_sd, clipped; decider EXPLORATION), or INVALID, with
+    nothing changed, for an x that is not finite or whose square overflows. With
+    recall_candidates "past" the candidates are the elements of earlier trials."""
+    since = s.trial_start if s.past_only else NO_EXCLUSION
     element = act(x, s.size, s.inputs, s.variance, s.group_of, s.group_size, s.group_weight,
-                  s.sim, s.nxt, s.table, s.table_w, s.utility, s.alpha, s.threshold)
+                  s.sim, s.nxt, s.table, s.table_w, s.utility, s.alpha, s.threshold, s.time,
+                  since)
     if element == INVALID:
         return INVALID
     s.obs[:] = x
@@ -384,9 +472,16 @@ def act_memory(s, x):
             s.decided[element] = True
         s.memory_decisions += 1
         s.decider = MEMORY
+        if s.eq7_signal != EQ7_REWARD:
+            s.expected = expected_reward(s, element)
         return element
     s.fallback_decisions += 1
     s.decider = EXPLORATION if element >= 0 else -1
+    if element >= 0 and s.explore_random:
+        for i in range(s.action.shape[0]):
+            s.action[i] = s.rng.normal(0.0, s.random_sd)
+        clip_unit(s.action)
+        return EXPLORED
     return FALLBACK
 
 
@@ -400,7 +495,8 @@ def learn_step(s, reward):
         s.obs, s.action, reward, s.steps, s.size, s.tail, s.referred, s.inputs, s.sums,
         s.variance, s.actions, s.utility, s.rel, s.time, s.nxt, s.prev, s.table, s.table_w,
         s.floor, s.initial_utility, s.initial_reliability, s.discount, s.cutoff, s.rho,
-        s.decay, s.decided, s.eq7_scope, s.forgetting)
+        s.decay, s.decided, s.eq7_scope, s.forgetting, eq7_signal(s, reward), s.eq7_walk,
+        s.cut_links)
     s.steps += 1
     s.pending = False
     return True
@@ -410,10 +506,12 @@ def learn_step(s, reward):
 def end_trial(s):
     """A trial ends (ebrl.Agent.end_episode has the readings' meaning): the episode's
     link is cut unless continuing, eq 7's starting point and its decided flags reset,
-    the recall table emptied unless kept."""
+    the recall table emptied unless kept; the next trial's first step noted
+    (recall_candidates "past")."""
     if not s.continuing:
         s.tail = -1
     s.referred = -1
+    s.trial_start = s.steps
     if s.flag_decisions:
         s.decided[:] = False
     if not s.keep_recall:

@@ -181,5 +181,34 @@ AGENT = (
             paper='Section 3.4: "The demand value of random action is produced using pseudo '
                   'Gaussian distribution of which mean value is 0 and standard deviation is 0.5."',
             fallback=True),
+    # eq 7's r_t: the reward (the equation as printed: it acts at a goal, from the latest
+    # memory decision's element); or, after each memory decision, the difference between
+    # the reward and the reward that decision expected (the sentence before eq 7): its
+    # eq 5 measure min(W, U) ("surprise_measure"), or its utility as a reward per step,
+    # (1 - gamma) U ("surprise_rate"); a reward after a fallback's step expected nothing.
+    Reading("eq7_signal", "agent", ("reward", "surprise_measure", "surprise_rate"), "reward",
+            "eq 7's r: the reward, or the reward less the decision's expected reward",
+            paper='Section 2.4: "the reliability of memory element that the agent referred '
+                  'for decision should be modified according to the difference between '
+                  'real and expected reward values"'),
+    # eq 7's walk (eq7_scope "to_start"): every element changed by the same r ("whole");
+    # r times gamma^(t_ref - t_j), as eq 6 discounts ("discounted"); or stopped where
+    # gamma^(t_ref - t_j) falls below utility_cutoff, where eq 6 stops ("cut").
+    Reading("eq7_walk", "agent", ("whole", "discounted", "cut"), "whole",
+            "eq 7's walk back: undiscounted, discounted as eq 6, or stopped at eq 6's cutoff"),
+    # 2.1: a forgotten element's episode neighbours are linked to each other ("join"), or
+    # the episode is cut there ("cut": the earlier part ends, the later one starts).
+    Reading("forgetting_link", "agent", ("join", "cut"), "join",
+            "forgetting joins the episode across the gap, or cuts it there"),
+    # 2.2: every stored element is a recall candidate ("all"), or only the elements of
+    # earlier trials ("past": none stored since the current trial began).
+    Reading("recall_candidates", "agent", ("all", "past"), "all",
+            "recall candidates: every element, or only earlier trials' elements"),
+    # 2.3: the exploration step goes to the fallback (the avoidance rule, or its random
+    # action 20% of the time), or is Section 3.4's random action (Gaussian, sd random_sd).
+    Reading("exploration", "agent", ("fallback", "random"), "fallback",
+            "an exploration step: the fallback's action, or Section 3.4's random action",
+            paper='Section 2.3: "it should sometimes do a type of exploration behavior '
+                  'ignoring the above decision process"'),
 )
 BY_NAME = {r.name: r for r in AGENT}

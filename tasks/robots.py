@@ -68,6 +68,49 @@ DRIVES = {
 }
 
 
+#: The named protocols a run can take (`ebrl run --protocol`): "adopted", each robot's
+#: readings as its entry below gives them (the drive's, then its own: PROTOCOL_VERSION's
+#: readings); "literal", the paper as written (LITERAL).
+PROTOCOLS = ("adopted", "literal")
+
+#: The literal protocol: every value the paper states is the paper's, and every detail it
+#: leaves open takes its plainest reading, one listing for every robot (a reading acts
+#: where it applies: tasks.readings.applies). Chosen and written down, each with its
+#: reason (docs/interpretation.md, "The literal protocol"), before any run of it was
+#: looked at; every reading of the registry is listed (tests/test_robots.py).
+LITERAL = (
+    # the learner (Sections 2 and 3.4)
+    ("policy_threshold", 0.0),       # "enough value": any measure above nothing
+    ("initial_reliability", 1.0),    # a new memory as reliable as any, decaying from there
+    ("initial_utility", 0.0),        # no reward seen yet
+    ("utility_cutoff", 0.0),         # eq 6 as printed: the whole episode, no cutoff
+    ("variance_floor", 1e-6),        # a numerical guard only (V_i = 0 divides by zero)
+    ("episode", "trial"),
+    ("recall_at_trial_end", "empty"),
+    ("eq7_scope", "to_start"),       # "following the backward links"
+    ("forgetting", "least_reliable"),  # stated, Section 2.1
+    ("eq9_dead_zone", "keep"),       # eq 9's a_h "not changed": it keeps its value
+    ("random_in_avoidance", "replace"),  # "some probability of random action"
+    ("random_demand", "gaussian"),   # stated, Section 3.4, for every random action
+    ("eq7_signal", "reward"),        # eq 7 as printed: r_t is the reward
+    ("eq7_walk", "whole"),
+    ("forgetting_link", "join"),
+    ("recall_candidates", "all"),
+    ("exploration", "fallback"),     # 2.3: "random or intrinsic behavior"
+    # the body (Section 3.3)
+    ("action_noise", 0.05),          # stated for the two wheels robot; the same for both
+    ("bump", "stop"),                # "moves ... until it bumps": the motion stops there
+    ("radius", None),                # the robot file's (1.5 for the paper's robots)
+    ("thrust", "scaled"),            # stated maximum 0.2: a demand of 1 is 0.2
+    ("wall_friction", None),
+    ("restitution", 1.0),
+    ("velocity_noise", 0.0),         # "it can also detect the velocity": as it is
+    ("velocity_code", "none"),
+    ("blocked_move", "stop"),        # stated: "the rest portion of move is transferred"
+    ("leftover_turn", "commanded"),
+)
+
+
 @dataclasses.dataclass(frozen=True)
 class Robot:
     name: str
@@ -102,6 +145,15 @@ class Robot:
         object.__setattr__(self, "model", pathlib.Path(self.model))
         merged = dict(d.readings) | dict(self.readings)
         object.__setattr__(self, "readings", tuple(sorted(merged.items())))
+
+    def under(self, protocol):
+        """This entry under a named protocol (PROTOCOLS): itself for "adopted"; for
+        "literal", with every reading LITERAL's."""
+        if protocol == "adopted":
+            return self
+        if protocol != "literal":
+            raise ValueError(f"unknown protocol {protocol!r}; valid: {', '.join(PROTOCOLS)}")
+        return dataclasses.replace(self, readings=LITERAL)
 
     def task_config(self, **overrides):
         """tasks.TaskConfig with this robot's task readings, then the overrides."""

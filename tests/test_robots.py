@@ -1,5 +1,6 @@
 """The robot registry, the naming contract and the 3D robots, in real MuJoCo and through
 the real command line."""
+import dataclasses
 import math
 import re
 
@@ -266,3 +267,21 @@ def test_a_drives_readings_reach_its_robots_runs_and_set_overrides_them():
     env = tasks.load("floating", seed=0)
     assert env.task.config.bump == "stop"
     env.close()
+
+
+def test_the_literal_protocol_lists_every_reading_once_and_reaches_the_run():
+    """tasks.robots.LITERAL names every reading of the registry once, with an allowed
+    value; a spec under it carries them all in its configs, whatever the entry's own."""
+    from experiments.running.protocol import RunSpec
+    from tasks import readings
+    from tasks.robots import LITERAL
+    names = [name for name, _ in LITERAL]
+    assert sorted(names) == sorted(readings.BY_NAME) and len(set(names)) == len(names)
+    for name, value in LITERAL:
+        readings.BY_NAME[name].check(value)
+    for robot in ("two_wheel", "floating"):
+        spec = RunSpec(robot, "avoidance", 0, 100, protocol="literal")
+        configs = dataclasses.asdict(spec.agent_config()) | dataclasses.asdict(spec.task_config())
+        assert {name: configs[name] for name in names} == dict(LITERAL)
+        assert spec.parameters()["protocol"] == "literal"
+        assert "protocol" not in RunSpec(robot, "avoidance", 0, 100).parameters()

@@ -113,6 +113,14 @@ def add_backend(parser):
     parser.add_argument("--backend", type=choice(("local", "ray")), default="local")
 
 
+def add_protocol(parser):
+    from tasks.robots import PROTOCOLS
+    parser.add_argument("--protocol", type=choice(PROTOCOLS), default="adopted",
+                        help="the readings: adopted (each robot's entry, protocol "
+                             "PROTOCOL_VERSION's) or literal (the paper as written, "
+                             "docs/interpretation.md); default: adopted")
+
+
 def add_no_progress(parser):
     parser.add_argument("--no-progress", action="store_true")
 

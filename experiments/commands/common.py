@@ -88,7 +88,8 @@ def plan(args, overrides=()):
     conditions = paper.CONDITIONS if args.condition == "all" else (args.condition,)
     return runner.plan(selected_robots(args), conditions, args.seeds, args.steps, overrides,
                        args.drive, getattr(args, "agent", "ebrl"),
-                       getattr(args, "first_trial", False))
+                       getattr(args, "first_trial", False),
+                       getattr(args, "protocol", "adopted"))
 
 
 def report_if_any(folder, ran):

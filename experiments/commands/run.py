@@ -35,6 +35,7 @@ def add_parser(subparsers):
     p.add_argument("--first-trial", action="store_true",
                    help="end each run at its first goal (or its budget): its first trial, "
                         "bit for bit a full run's, in folders ROBOT.first_trial/")
+    arguments.add_protocol(p)
     arguments.add_no_progress(p)
     p.set_defaults(func=run)
 

@@ -51,12 +51,15 @@ class RunSpec:
     #: True: the run ends at its first goal (or its budget), its first trial bit for bit
     #: a full run's (`ebrl run --first-trial`); in its own folders (`label`).
     first_trial: bool = False
+    #: A named protocol of tasks.robots.PROTOCOLS: "adopted" (the registry's readings) or
+    #: "literal" (the paper as written, tasks.robots.LITERAL).
+    protocol: str = "adopted"
 
     @property
     def entry(self) -> Robot:
-        """The robot's registry entry (tasks.robots.Robot)."""
+        """The robot's registry entry (tasks.robots.Robot), under the spec's protocol."""
         from tasks.robots import resolve
-        return resolve(self.robot, self.drive)
+        return resolve(self.robot, self.drive).under(self.protocol)
 
     @property
     def label(self) -> str:
@@ -113,7 +116,8 @@ class RunSpec:
             "task": dataclasses.asdict(task),
             "model_sha256": model_digest(entry, task),
         } | ({} if self.behaviour is None else {"behaviour": _genome_dict(self.behaviour)}) \
-          | ({"first_trial": True} if self.first_trial else {})
+          | ({"first_trial": True} if self.first_trial else {}) \
+          | ({} if self.protocol == "adopted" else {"protocol": self.protocol})
 
 
 def _genome_dict(genome):
