@@ -48,7 +48,7 @@ DRIVES = {
     # 6 less its blocked_move=refuse); the learner's Table 1 defaults.
     "two_wheel": Drive("two_wheel", table1="T", budget=30_000, avoidance="eq8",
                        modalities=(("range", 1.0),),
-                       readings=(("random_demand", "uniform_all"),
+                       readings=(("random_demand", "uniform_walk"),
                                  ("random_in_avoidance", "add"),
                                  ("leftover_turn", "away"))),
     # Stage 1's fallback and action readings (docs/fit_first_trial_floating.md, trial 9);
@@ -57,10 +57,8 @@ DRIVES = {
     # `ebrl fit`'s trial 126 (protocol 4, study fit150, RESULTS.md "Search"), as searched.
     "floating": Drive("floating", table1="F", budget=100_000, avoidance="eq9-10",
                       modalities=(("range", 0.7), ("velocity", 0.3)),
-                      readings=(("policy_threshold", 0.4),
-                                ("initial_reliability", 0.15582952700818442),
-                                ("eq9_dead_zone", "keep"),
-                                ("random_demand", "uniform_all"),
+                      readings=(("eq9_dead_zone", "keep"),
+                                ("random_demand", "uniform_walk"),
                                 ("random_in_avoidance", "replace"),
                                 ("action_noise", 0.17273080599893353),
                                 ("velocity_noise", 0.06931187891441754),

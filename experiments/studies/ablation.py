@@ -56,6 +56,13 @@ READINGS = (
     _ablated("forgetting"),
     _ablated("radius", (None, 1.0, 2.5)),
     _ablated("policy_threshold", (0.0, 0.05, 0.2)),
+    # issue 37's untried Section 2 readings (docs/interpretation.md, "The agent")
+    _ablated("eq7_signal"),
+    _ablated("eq7_walk"),
+    _ablated("utility_cutoff", (1e-4, 0.0)),
+    _ablated("forgetting_link"),
+    _ablated("recall_candidates"),
+    _ablated("exploration"),
 )
 BY_NAME = {r.name: r for r in READINGS}
 DEFAULT = "default"
