@@ -46,21 +46,29 @@ def clean_run(tmp_path_factory):
     return out
 
 
-def test_claim_odds_draws_seeds_and_judges_each_draw_as_the_report(clean_run):
+def test_claim_odds_draws_seeds_and_judges_each_draw_as_the_report(tmp_path):
     """examples/claim_odds.py, run as a user would: a draw of every seed is the report's
     own verdicts (each share 0 or 1, the same as report.claims on the whole folder); more
     seeds than every group has is one line and exit status 1."""
     from experiments.outputs import report
     from experiments.running import results
-    want = {c: float(ok) for c, _, ok in report.claims(results.summarize(results.load_runs(clean_run)))}
-    script = [sys.executable, "examples/claim_odds.py", str(clean_run)]
+    out = tmp_path / "results"  # long enough for a goal in both conditions on both seeds
+    ebrl("run", "--robot", "two_wheel", "--seeds", "0-1", "--steps", "8000", "--no-progress",
+         "--workers", "1", "--out", out)
+    want = {c: float(ok) for c, _, ok in report.claims(results.summarize(results.load_runs(out)))}
+    script = [sys.executable, "examples/claim_odds.py", str(out)]
     proc = subprocess.run(script + ["--seeds", "2", "--draws", "3"], cwd=ROOT,
                           capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     lines = proc.stdout.splitlines()
-    assert lines[0] == "3 draws of 2 seeds from the 2 seeds every group has:"
-    got = {line.split("%", 1)[1].strip(): float(line.split("%")[0]) / 100 for line in lines[1:]}
-    assert got == want and want
+    assert lines[0] == "3 draws of 2 seeds; share of draws on which each claim holds:"
+    assert lines[1] == "| claim | our runs (2 seeds) | the paper's figures |"
+    rows = [line.strip("|").split("|") for line in lines[3:]]
+    got = {claim.strip(): float(ours.strip().rstrip("%")) / 100 for claim, ours, _ in rows}
+    assert {c: got[c] for c in want} == want and want
+    # each learning claim (a shrink's interval) also by its point estimate
+    points = [c for c in got if c.endswith("(point estimate)")]
+    assert len(points) == sum("learning shrinks trials" in c for c in want) > 0
     bad = subprocess.run(script + ["--seeds", "3"], cwd=ROOT, capture_output=True, text=True)
     assert bad.returncode == 1 and "only 2 seeds" in bad.stderr
 
