@@ -12,7 +12,7 @@ import dataclasses
 
 from tasks.mount.fields import fail
 from tasks.mount.records import Action, Classes
-from tasks.mount.spec import actuator, file_actuator
+from tasks.mount.spec import actuator, by_name, file_actuator
 
 #: The action kinds by name, in their registration order (the order ACTIONS lists them).
 KINDS: dict[str, type[Action]] = {}
@@ -264,19 +264,21 @@ class WheelMotors(Action):
         return Classes(None, two_wheel.motor_wheel_physics(len(self.motors), self.kp, self.kv))
 
 
-#: A gait's motors by contract name: hip_0..3, then ankle_0..3 (tasks.gait.LEGS = 4 legs).
-GAIT_ROLES = tuple(f"{j}_{i}" for j in ("hip", "ankle") for i in range(4))
+#: A gait leg's keys ([[action.legs]]): its swing joint, its lift joint or joints, its
+#: held joint or joints (an optional yaw, kept at rest): tasks.gait.Leg.
+LEG_KEYS = ("swing", "lift", "yaw")
 
 
 @register("gait")
 @dataclasses.dataclass(frozen=True)
 class Gait(Action):
-    """The gait drive (tasks.gait): a legged robot's own hip and ankle motors walk the
-    two-wheel action family."""
+    """The gait drive (tasks.gait): a legged robot's legs, listed with their joints by
+    role, walk the two-wheel action family through the file's own torque motors or
+    position servos."""
     drives = ("two_wheel",)
-    keys = frozenset({"gait", *GAIT_ROLES})
-    #: (contract name, the file's motor) pairs, those given, in GAIT_ROLES' order.
-    motors: tuple[tuple[str, str], ...] = ()
+    keys = frozenset({"gait", "legs"})
+    #: The legs, as tasks.gait.Leg tuples (swing, lifts, held), in the mount's order.
+    legs: tuple[tuple[str, tuple[str, ...], tuple[str, ...]], ...] = ()
     #: The [action.gait] table: (parameter, value) pairs, sorted (tasks.gait.PARAMETERS).
     parameters: tuple[tuple[str, float], ...] = ()
 
@@ -285,7 +287,35 @@ class Gait(Action):
         import math
 
         from tasks import gait
-        motors = tuple((r, fields.text(table, r, f"action.{r}")) for r in GAIT_ROLES if r in table)
+        listed = table.get("legs")
+        if listed is None:
+            fields.fail("action.legs", "missing: the legs, as [[action.legs]] tables of "
+                                       "swing, lift (and yaw) joints")
+        if not isinstance(listed, list) or not listed:
+            fields.fail("action.legs", "must be one or more [[action.legs]] tables")
+        legs, seen = [], set()
+        for i, leg in enumerate(listed):
+            where = f"action.legs[{i}]"
+            fields.table(leg, set(LEG_KEYS), where)
+            for key in ("swing", "lift"):
+                if key not in leg:
+                    fields.fail(f"{where}.{key}", "missing: the file's joint(s) for it")
+            roles = []
+            for key in LEG_KEYS:
+                v = leg.get(key, [])
+                v = [v] if isinstance(v, str) else v
+                if not isinstance(v, list) or not all(isinstance(x, str) and x for x in v):
+                    fields.fail(f"{where}.{key}", "must be a joint's name or a list of them")
+                if key != "yaw" and not v:
+                    fields.fail(f"{where}.{key}", "must name a joint")
+                if key == "swing" and len(v) != 1:
+                    fields.fail(f"{where}.{key}", f"one joint, got {v}")
+                for name in v:
+                    if name in seen:
+                        fields.fail(f"{where}.{key}", f"joint {name!r} is listed twice")
+                    seen.add(name)
+                roles.append(tuple(v))
+            legs.append((roles[0][0], roles[1], roles[2]))
         g = table.get("gait", {})
         if not isinstance(g, dict):
             fields.fail("action.gait", "must be a table")
@@ -294,24 +324,52 @@ class Gait(Action):
                 fields.fail(f"action.gait.{k}", f"unknown key; valid: {', '.join(gait.PARAMETERS)}")
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
                 fields.fail(f"action.gait.{k}", f"must be a number, got {v!r}")
-        return cls(motors, tuple(sorted((k, float(v)) for k, v in g.items())))
+        return cls(tuple(legs), tuple(sorted((k, float(v)) for k, v in g.items())))
 
     def claimed(self):
-        return {role for role, _ in self.motors} | {k for k, _ in self.parameters}
+        return {"legs"} | {k for k, _ in self.parameters}
 
-    def edit(self, mount, spec, base, names):
-        """Checks the file's 4 hips and 4 ankles the mount names, and maps them."""
-        given = dict(self.motors)
-        for role in GAIT_ROLES:
-            name = given.get(role)
-            if name is None:
-                fail(mount.path, f"action.{role}", "missing: the file's motor for it")
-            file_actuator(mount, spec, f"action.{role}", name)
-        names.update((role, name) for role, name in self.motors if role != name)
+    def check_joints(self, fields, joints):
+        if joints == "planar":
+            fields.fail("joints", "the gait walks a free base on its own legs (joints = file "
+                                  "or free); planar replaces the base's joints and drops the "
+                                  "file's motors")
+
+    def check_file(self, mount, spec, drop, names):
+        """The listed joints are hinges or slides of the file, each moved by one of its
+        actuators (on the joint, or on a tendon over it), which are kept."""
+        import mujoco
+        if "actuators" in drop:
+            fail(mount.path, "drop", "the gait walks the legs through the file's own "
+                                     "actuators: do not drop them")
+        moved = set()
+        for act in spec.actuators:
+            if act.trntype == mujoco.mjtTrn.mjTRN_JOINT:
+                moved.add(act.target)
+            elif act.trntype == mujoco.mjtTrn.mjTRN_TENDON:
+                tendon = by_name(spec.tendons, act.target)
+                if tendon is not None:
+                    if "tendons" in drop:
+                        fail(mount.path, "drop", f"actuator {act.name!r} pulls a tendon of "
+                                                 "the file: do not drop its tendons")
+                    moved |= {w.target.name for w in tendon.path
+                              if w.type == mujoco.mjtWrap.mjWRAP_JOINT}
+        for i, (swing, lifts, held) in enumerate(self.legs):
+            for key, group in (("swing", (swing,)), ("lift", lifts), ("yaw", held)):
+                for name in group:
+                    field = f"action.legs[{i}].{key}"
+                    joint = spec.joint(name)
+                    if joint is None:
+                        fail(mount.path, field, f"no joint named {name!r} in {mount.model}")
+                    if joint.type not in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE):
+                        fail(mount.path, field, f"joint {name!r} is not a hinge or a slide")
+                    if key != "yaw" and name not in moved:
+                        fail(mount.path, field, f"no actuator of {mount.model.name} moves "
+                                                f"joint {name!r}")
 
     def classes(self, mount):
         from tasks import gait
-        return Classes(gait.Gait, gait.physics_class(dict(self.parameters)))
+        return Classes(gait.Gait, gait.physics_class(dict(self.parameters), self.legs))
 
     def check_task_config(self, config):
         from tasks import gait

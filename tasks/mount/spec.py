@@ -125,6 +125,8 @@ def _bumper(mount, spec, base, planar, names):
                 if g is hull:
                     continue
                 g.contype, g.conaffinity = (0, 0) if planar else (0, 5)
+                if mount.condim is not None:
+                    g.condim = mount.condim
     if hull is None:
         hull = _added_bumper(mount, base, planar)
     if not contract:
