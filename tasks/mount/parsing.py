@@ -10,9 +10,11 @@ from tasks.mount.kinds import KINDS
 from tasks.mount.records import Action, Beams, Bumper, Mount
 from tasks.mount.spec import BEAMS
 
-#: Joints of the base: its file's, a free joint added, or slide x, slide y (and, for the
-#: two-wheel drive, hinge yaw) added in place of the base's own.
-JOINTS = ("file", "free", "planar")
+#: Joints of the base: its file's, a free joint added, slide x, slide y (and, for the
+#: two-wheel drive, hinge yaw) added in place of the base's own, or slides x, y (and z)
+#: added beside the base's own joints ("slides": held at its height; "slides_z": resting
+#: on the floor by gravity).
+JOINTS = ("file", "free", "planar", "slides", "slides_z")
 #: What of the file a mount may drop: "world" the geoms of its world body (floor, walls,
 #: markers), "lights", "skybox" (its skybox textures), "cameras", "actuators", "tendons",
 #: "sensors" (all but the rangefinders the beams name).
@@ -192,7 +194,7 @@ def _parse_condim(fields, data, joints):
     v = data["condim"]
     if isinstance(v, bool) or v not in CONDIMS:
         fields.fail("condim", f"must be one of {', '.join(map(str, CONDIMS))}, got {v!r}")
-    if joints == "planar":
-        fields.fail("condim", "a planar robot's geoms touch nothing: condim is for a robot "
-                              "that stands on the floor")
+    if joints in ("planar", "slides"):
+        fields.fail("condim", f"joints = {joints}: its geoms touch nothing (condim is for "
+                              "a robot that stands on the floor)")
     return int(v)
