@@ -11,7 +11,7 @@ import pytest
 
 import tasks
 from helpers import ROOT
-from tasks import mount, navigation
+from tasks import mount
 
 MOUNTS = ROOT / "models" / "mounts"
 

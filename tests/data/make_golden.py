@@ -85,8 +85,9 @@ def step_digests_name():
 
 
 def step_digest(robot, compiled, **fields):
-    """sha256 of 300 steps (a gait's, as the Ant's and the quadruped's: 25) of random actions in [-1.2, 1.2] (seed 5)
-    from tasks.load(robot, seed=11, **fields): each step's observation, pose, qpos,
+    """sha256 of 300 steps (a gait's, as the Ant's and the quadruped's: 25) of random
+    actions in [-1.2, 1.2] (seed 5) from tasks.load(robot, seed=11, **fields): each
+    step's observation, pose, qpos,
     qvel, step type, reward and substeps; a new episode after the last step of one."""
     import tasks
     env = tasks.load(robot, seed=11, **fields)
