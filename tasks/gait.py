@@ -42,7 +42,8 @@ import numpy as np
 from tasks import navigation
 
 from tasks.kernels.gait import GaitDrive
-from tasks.two_wheel import family_settings
+from tasks.two_wheel import control_ranges, family_settings, is_position_servo, \
+    is_torque_motor, length_gains
 
 #: The gait's parameters (a mount's [action.gait] may set any of them) and defaults.
 PARAMETERS = {
@@ -67,24 +68,6 @@ PARAMETERS = {
 #: A leg as a mount lists it: its swing joint (moves the foot fore and aft), its lift
 #: joints (raise it), its held joints (an optional yaw, kept at rest); the file's names.
 Leg = tuple[str, tuple[str, ...], tuple[str, ...]]
-
-
-def is_position_servo(mjm, a):
-    """Whether actuator a is a position servo (MuJoCo's <position>, or a <general> with
-    an affine bias -kp * length): its control is the length it holds."""
-    return (int(mjm.actuator_biastype[a]) == int(mujoco.mjtBias.mjBIAS_AFFINE)
-            and int(mjm.actuator_gaintype[a]) == int(mujoco.mjtGain.mjGAIN_FIXED)
-            and mjm.actuator_biasprm[a, 0] == 0.0
-            and mjm.actuator_biasprm[a, 1] == -mjm.actuator_gainprm[a, 0] != 0.0
-            and mjm.actuator_biasprm[a, 2] == 0.0)
-
-
-def is_torque_motor(mjm, a):
-    """Whether actuator a is a torque motor on one joint (MuJoCo's <motor>)."""
-    return (int(mjm.actuator_biastype[a]) == int(mujoco.mjtBias.mjBIAS_NONE)
-            and int(mjm.actuator_gaintype[a]) == int(mujoco.mjtGain.mjGAIN_FIXED)
-            and int(mjm.actuator_dyntype[a]) == int(mujoco.mjtDyn.mjDYN_NONE)
-            and int(mjm.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT))
 
 
 class Physics(navigation.Physics):
@@ -152,26 +135,11 @@ class Physics(navigation.Physics):
         self._dq = mjm.jnt_dofadr[self._joints].astype(np.int64)
         self._rest = mjm.qpos0[self._q].copy()
         # what moves each listed joint: the actuators' lengths' change per radian of it
-        d = mujoco.MjData(mjm)
-        gain = np.zeros((mjm.nu, len(joints)))
-        h = 1e-3
-        for c, q in enumerate(self._q):
-            lengths = []
-            for delta in (h, -h):
-                d.qpos[:] = mjm.qpos0
-                d.qpos[q] += delta
-                mujoco.mj_fwdPosition(mjm, d)
-                lengths.append(d.actuator_length.copy())
-            gain[:, c] = (lengths[0] - lengths[1]) / (2 * h)
-        gain[np.abs(gain) < 1e-9] = 0.0
-        d.qpos[:] = mjm.qpos0
-        mujoco.mj_fwdPosition(mjm, d)
+        gain, lengths = length_gains(mjm, self._q)
         movers = np.flatnonzero(np.any(gain != 0.0, axis=1))
-        lo = mjm.actuator_ctrlrange[:, 0].copy()
-        hi = mjm.actuator_ctrlrange[:, 1].copy()
-        unlimited = ~mjm.actuator_ctrllimited.astype(bool)
-        lo[unlimited], hi[unlimited] = -np.inf, np.inf
-        if all(is_torque_motor(mjm, a) for a in movers):
+        lo, hi = control_ranges(mjm, np.arange(mjm.nu))
+        if all(is_torque_motor(mjm, a) and int(mjm.actuator_trntype[a]) == int(
+                mujoco.mjtTrn.mjTRN_JOINT) for a in movers):
             acts = np.full(len(joints), -1, dtype=np.int64)
             for a in movers:
                 acts[list(self._joints).index(mjm.actuator_trnid[a, 0])] = a
@@ -190,7 +158,7 @@ class Physics(navigation.Physics):
         self._ctrl_lo = np.where(self._acts >= 0, lo[self._acts], 0.0)
         self._ctrl_hi = np.where(self._acts >= 0, hi[self._acts], 0.0)
         self._servo_gain = gain[self._servos].copy()
-        self._servo_rest = d.actuator_length[self._servos].copy()
+        self._servo_rest = lengths[self._servos].copy()
         self._servo_lo, self._servo_hi = lo[self._servos], hi[self._servos]
 
     def _shares(self, mjm):

@@ -198,3 +198,159 @@ def test_the_gait_refuses_a_joint_no_actuator_moves(tmp_path):
     path.write_text(text)
     with pytest.raises(mount.MountError, match="action.legs.0..yaw: joint .root. is not a hinge or a slide"):
         tasks.load(str(path)).close()
+
+
+#: A tricycle-like cart written for these tests: a disc on its own steering hinge (about
+#: z) carried by one wheel under its centre (its own hinge "roll" about y) and two
+#: frictionless skids; root slides x, y and z are added beside the steering hinge. Its
+#: actuators, by kind: ACTUATORS.
+TRICYCLE = """<mujoco model="tricycle">
+  <compiler angle="radian"/>
+  <worldbody>
+    <body name="cart" pos="0 0 0.1">
+      <joint name="steer" type="hinge" axis="0 0 1" damping="0.01"/>
+      <geom name="shell" type="cylinder" size="0.15 0.03" mass="1"/>
+      <geom name="skid_front" type="sphere" size="0.03" pos="0.1 0 -0.07" condim="1" mass="0.01"/>
+      <geom name="skid_back" type="sphere" size="0.03" pos="-0.1 0 -0.07" condim="1" mass="0.01"/>
+      <body name="wheel" pos="0 0 -0.05">
+        <joint name="roll" type="hinge" axis="0 1 0" damping="0.001"/>
+        <geom name="tyre" type="cylinder" size="0.05 0.01" euler="1.5707963267948966 0 0"
+              condim="3" friction="1" mass="0.1"/>
+      </body>
+    </body>
+  </worldbody>
+  <tendon>
+    <fixed name="sum"><joint joint="roll" coef="1"/><joint joint="steer" coef="1"/></fixed>
+    <fixed name="difference"><joint joint="roll" coef="1"/><joint joint="steer" coef="-1"/></fixed>
+  </tendon>
+  <actuator>
+{actuators}
+  </actuator>
+</mujoco>
+"""
+ACTUATORS = {
+    "torque": '<motor name="drive" joint="roll" ctrlrange="-1 1"/>'
+              '<motor name="spin" joint="steer" ctrlrange="-1 1"/>',
+    "mixed": '<motor name="a" tendon="sum" ctrlrange="-1 1"/>'
+             '<motor name="b" tendon="difference" ctrlrange="-1 1"/>',
+    "position": '<position name="drive" joint="roll" kp="2" kv="0.05"/>'
+                '<position name="spin" joint="steer" kp="2" kv="0.2"/>',
+    "velocity": '<velocity name="drive" joint="roll" kv="0.2"/>'
+                '<velocity name="spin" joint="steer" kv="0.5"/>',
+}
+GAINS = {"torque": "kp = 2.0\nkv = 0.1\n", "mixed": "kp = 2.0\nkv = 0.1\n", "position": "",
+         "velocity": "kp = 20.0\n"}
+TRICYCLE_MOUNT = """name = "{name}"
+file = "{name}.xml"
+drive = "two_wheel"
+unit = 0.1
+base = "cart"
+joints = "slides_z"
+timestep = 0.002
+integrator = "implicitfast"
+time_scale = 2.5
+[bumper]
+geom = "shell"
+[beams]
+height = 0.05
+[action]
+kind = "joint_motors"
+forward = "roll"
+turn = "steer"
+{gains}"""
+
+
+def _tricycle(folder, kind, name=None, mount=None):
+    name = name or f"tricycle_{kind}"
+    (folder / f"{name}.xml").write_text(TRICYCLE.format(actuators=ACTUATORS[kind]))
+    path = folder / f"{name}.toml"
+    path.write_text(mount or TRICYCLE_MOUNT.format(name=name, gains=GAINS[kind]))
+    return path
+
+
+@pytest.mark.parametrize("kind", ["torque", "position", "velocity"])
+def test_joint_motors_drive_a_robots_own_actuators_on_named_joints(tmp_path, kind):
+    """The tricycle rolls on its wheel's hinge and steers on its base's hinge, through
+    its own torque motors, position servos or velocity servos (none added, none dropped):
+    random free-space actions within the drive's 5% (`ebrl check`'s accuracy)."""
+    from experiments.checks import robotcheck
+    path = _tricycle(tmp_path, kind)
+    m, _ = tasks.compile_robot(tasks.resolve(str(path)))
+    assert _names(m, mujoco.mjtObj.mjOBJ_ACTUATOR, m.nu) == ["robot/drive", "robot/spin"]
+    errors, limits = robotcheck.accuracy(str(path), 12, seed=2)
+    for key, e in errors.items():
+        assert e.max() <= limits[key], (kind, key, e.max())
+
+
+def test_the_joint_controllers_solve_by_hand(tmp_path):
+    """Each controller's controls, from a record set by hand (tasks.kernels.joints.controls):
+    torque motors on tendons roll + steer and roll - steer give the PD torques
+    tau = kp (target - q) - kv dq with controls ((tau_roll + tau_steer) / 2,
+    (tau_roll - tau_steer) / 2), clipped to +-1; position servos on the joints hold the
+    targets; velocity servos command kp (target - q)."""
+    from tasks.kernels import joints
+    q, dq, target = np.array([0.3, -0.2]), np.array([0.5, 1.0]), np.array([0.5, 0.1])
+    for kind in ("mixed", "position", "velocity"):
+        env = tasks.load(str(_tricycle(tmp_path, kind)), seed=0)
+        try:
+            env.reset()
+            p = env.physics
+            parts = p.parts       # the record's fields (its arrays are the record's)
+            assert parts["mode"] == {"mixed": joints.TORQUE, "position": joints.POSITION,
+                                     "velocity": joints.VELOCITY}[kind]
+            p.data.qpos[parts["joint_q"]] = q
+            p.data.qvel[parts["joint_dof"]] = dq
+            parts["target"][:] = target
+            joints.controls(p.record)
+            if kind == "mixed":
+                tau = 2.0 * (target - q) - 0.1 * dq            # (0.35, 0.5)
+                expected = np.clip([(tau[0] + tau[1]) / 2, (tau[0] - tau[1]) / 2], -1, 1)
+            elif kind == "position":
+                expected = target                              # rest 0, lengths 0
+            else:
+                expected = 20.0 * (target - q)                 # (4, 6)
+            got = parts["controls"]
+            assert np.allclose(got, expected, atol=1e-9), (kind, got, expected)
+        finally:
+            env.close()
+
+
+BAD_JOINT_MOTORS = [
+    ("torque", GAINS["torque"].replace("kv = 0.1\n", ""), "action.kv: missing: the torque motors' gain"),
+    ("position", "kp = 3.0\n", "action.kp: not a gain of position servos"),
+    ("velocity", "", "action.kp: missing: the velocity servos' gain"),
+    ("torque", GAINS["torque"] + "kd = 1.0\n", "action.kd: unknown key"),
+    ("position", "kv = 0.1\n", "action.kv: not a gain of position servos"),
+]
+
+
+@pytest.mark.parametrize("kind, gains, message", BAD_JOINT_MOTORS)
+def test_a_bad_joint_motors_mount_is_one_line(tmp_path, kind, gains, message):
+    name = f"bad_{kind}"
+    mount_text = TRICYCLE_MOUNT.format(name=name, gains=gains)
+    path = _tricycle(tmp_path, kind, name, mount_text)
+    with pytest.raises(mount.MountError) as e:
+        tasks.load(str(path)).close()
+    line = str(e.value)
+    assert "\n" not in line and line.startswith(str(path)) and message in line, line
+
+
+def test_joint_motors_refuse_joints_no_actuator_moves_and_mixed_kinds(tmp_path):
+    cases = (
+        (TRICYCLE_MOUNT.replace('forward = "roll"', 'forward = "wheel"'),
+         "action.forward: no joint named 'wheel' in"),
+        (TRICYCLE_MOUNT.replace('joints = "slides_z"', 'joints = "planar"'),
+         "joints: joint_motors drive the file's own joints"),
+    )
+    for i, (text, message) in enumerate(cases):
+        name = f"bad{i}"
+        path = _tricycle(tmp_path, "torque", name, text.format(name=name, gains=GAINS["torque"]))
+        with pytest.raises(mount.MountError, match=message.replace("(", r"\(")):
+            tasks.load(str(path)).close()
+    (tmp_path / "mix.xml").write_text(TRICYCLE.format(
+        actuators='<motor name="drive" joint="roll"/><velocity name="spin" joint="steer" kv="1"/>'))
+    path = tmp_path / "mix.toml"
+    path.write_text(TRICYCLE_MOUNT.format(name="mix", gains=GAINS["torque"]))
+    with pytest.raises(mount.MountError, match="action.kind: joint_motors need the joints' "
+                                               "actuators all torque motors"):
+        tasks.load(str(path)).close()

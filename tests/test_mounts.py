@@ -189,7 +189,8 @@ BAD = [
 def test_each_action_kind_is_one_registered_class_and_a_mount_is_named_records():
     """The drives take the kinds in their registration order (the errors list them so);
     the shipped mounts parse to named records, by kind."""
-    assert mount.ACTIONS == {"two_wheel": ("servos", "actuators", "wheels", "wheel_motors", "gait"),
+    assert mount.ACTIONS == {"two_wheel": ("servos", "actuators", "wheels", "wheel_motors",
+                                           "joint_motors", "gait"),
                              "floating": ("thrusters", "actuators")}
     for name, kind in mount.KINDS.items():
         assert kind.name == name and issubclass(kind, mount.Action)

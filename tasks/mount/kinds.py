@@ -264,6 +264,115 @@ class WheelMotors(Action):
         return Classes(None, two_wheel.motor_wheel_physics(len(self.motors), self.kp, self.kv))
 
 
+@register("joint_motors")
+@dataclasses.dataclass(frozen=True)
+class JointMotors(Action):
+    """The file's own actuators on two named joints, none added: `forward` (a wheel's
+    hinge rolling on the floor, or a slide along the base's heading) and `turn` (a hinge
+    about z that turns the base), driven by a controller on their targets for torque
+    motors, position servos or velocity servos (tasks.two_wheel.JointMotorPhysics)."""
+    drives = ("two_wheel",)
+    keys = frozenset({"forward", "turn", "kp", "kv"})
+    forward: str = ""
+    turn: str = ""
+    kp: float | None = None         # torque motors: N m/rad (PD); velocity servos: 1/s (P)
+    kv: float | None = None         # torque motors: N m s/rad
+
+    @classmethod
+    def parse(cls, fields, table, drive):
+        joints = {}
+        for role in ("forward", "turn"):
+            if role not in table:
+                fields.fail(f"action.{role}", "missing: the file's joint for it")
+            joints[role] = fields.text(table, role, f"action.{role}")
+        if joints["forward"] == joints["turn"]:
+            fields.fail("action.turn", f"joint {joints['turn']!r} is the forward joint too")
+        kp = fields.number(table, "kp", "action.kp")
+        kv = fields.number(table, "kv", "action.kv", positive=False)
+        if kv is not None and kv < 0:
+            fields.fail("action.kv", f"must not be negative, got {kv!r}")
+        return cls(**joints, kp=kp, kv=kv)
+
+    def claimed(self):
+        return {"forward", "turn"} | {k for k in ("kp", "kv") if getattr(self, k) is not None}
+
+    def check_joints(self, fields, joints):
+        if joints == "planar":
+            fields.fail("joints", "joint_motors drive the file's own joints (joints = file, "
+                                  "free, slides or slides_z); planar drops the file's motors")
+
+    def check_file(self, mount, spec, drop, names):
+        """The two joints (a hinge or slide forward, a hinge about z to turn) and the
+        file's actuators on them, all of one kind, kept; the gains that kind needs."""
+        import mujoco
+        if "actuators" in drop:
+            fail(mount.path, "drop", "joint_motors drive the file's own actuators: do not "
+                                     "drop them")
+        for role, name in (("forward", self.forward), ("turn", self.turn)):
+            joint = spec.joint(name)
+            if joint is None:
+                fail(mount.path, f"action.{role}", f"no joint named {name!r} in {mount.model}")
+            kinds = ((mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE) if role == "forward"
+                     else (mujoco.mjtJoint.mjJNT_HINGE,))
+            if joint.type not in kinds:
+                fail(mount.path, f"action.{role}", f"joint {name!r} is not a "
+                                                   + ("hinge or a slide" if role == "forward" else "hinge"))
+        on = [a for a in spec.actuators if _moves(spec, a, {self.forward, self.turn})]
+        for role, name in (("forward", self.forward), ("turn", self.turn)):
+            if not any(_moves(spec, a, {name}) for a in on):
+                fail(mount.path, f"action.{role}", f"no actuator of {mount.model.name} moves "
+                                                   f"joint {name!r}")
+        kind = {_kind(a) for a in on}
+        if len(kind) != 1 or None in kind:
+            fail(mount.path, "action.kind", "joint_motors need the joints' actuators all torque "
+                                            "motors, position servos or velocity servos; got "
+                                            + ", ".join(f"{a.name!r}: {_kind(a) or 'other'}" for a in on))
+        kind = kind.pop()
+        need = {"torque motors": ("kp", "kv"), "velocity servos": ("kp",), "position servos": ()}[kind]
+        for k in ("kp", "kv"):
+            if k in need and getattr(self, k) is None:
+                fail(mount.path, f"action.{k}", f"missing: the {kind}' gain (a robot's own)")
+            if k not in need and getattr(self, k) is not None:
+                fail(mount.path, f"action.{k}", f"not a gain of {kind} (they hold their "
+                                                "targets with their own)")
+
+    def classes(self, mount):
+        from tasks import two_wheel
+        return Classes(None, two_wheel.joint_motor_physics(
+            (self.forward, self.turn), self.kp or 0.0, self.kv or 0.0))
+
+
+def _moves(spec, act, joints):
+    """Whether the spec's actuator acts on one of the joints (directly or by a tendon)."""
+    import mujoco
+    if act.trntype == mujoco.mjtTrn.mjTRN_JOINT:
+        return act.target in joints
+    if act.trntype == mujoco.mjtTrn.mjTRN_TENDON:
+        tendon = by_name(spec.tendons, act.target)
+        return tendon is not None and any(
+            w.type == mujoco.mjtWrap.mjWRAP_JOINT and w.target.name in joints for w in tendon.path)
+    return False
+
+
+def _kind(act):
+    """A spec's actuator's kind as joint_motors names it, None for another."""
+    import mujoco
+    fixed = act.gaintype == mujoco.mjtGain.mjGAIN_FIXED
+    if not fixed:
+        return None
+    if act.biastype == mujoco.mjtBias.mjBIAS_NONE and act.dyntype == mujoco.mjtDyn.mjDYN_NONE:
+        return "torque motors"
+    if act.biastype != mujoco.mjtBias.mjBIAS_AFFINE:
+        return None
+    kp = act.gainprm[0]
+    if act.biasprm[0] == 0 and act.biasprm[1] == -kp != 0:
+        return "position servos"
+    if (act.biasprm[0] == 0 and act.biasprm[1] == 0 and act.biasprm[2] == -kp != 0
+            and act.dyntype == mujoco.mjtDyn.mjDYN_NONE):
+        return "velocity servos"
+    return None
+
+
 #: A gait leg's keys ([[action.legs]]): its swing joint, its lift joint or joints, its
 #: held joint or joints (an optional yaw, kept at rest): tasks.gait.Leg.
 LEG_KEYS = ("swing", "lift", "yaw")
