@@ -2,11 +2,12 @@
 the joint whose motion moves the robot forward (a wheel's hinge rolling on the floor, or
 a slide along the base's heading), and ``turn``, the hinge whose rotation turns it about
 z (a mount's joint_motors; tasks.two_wheel.JointMotorPhysics reads the model). The plan
-is the wheels' (tasks.kernels.wheels): a phase moves the joints' targets over its ramp,
-then lets them settle; a turn by `angle` moves the turn joint's target by angle, a move
-by `distance` units the forward joint's by distance * joint_per_unit (unit / radius for a
-wheel, unit for a slide). At every substep a controller turns the targets into the
-actuators' controls, by the actuators' kind (MODES):
+and its phases are the wheel motors' (tasks.kernels.motors: plan, wheel_phase): a phase
+moves the joints' targets over its ramp, then lets them settle; a turn by `angle` moves
+the turn joint's target by angle, a move by `distance` units the forward joint's by
+distance * joint_per_unit (unit / radius for a wheel, unit for a slide). At every
+substep a controller turns the targets into the actuators' controls, by the actuators'
+kind (MODES):
 
 - TORQUE (motors): the PD torques tau = kp (target - q) - kv dq, and the motors'
   controls of least norm that give them (tasks.kernels.motors.motor_controls, over the
@@ -19,12 +20,13 @@ actuators' controls, by the actuators' kind (MODES):
 
 Each control is clipped to its actuator's range."""
 from numba import njit
+from numba.extending import overload
 
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl import records
 from tasks.kernels import bindings, two_wheel as family
 from tasks.kernels.body import BODY_FIELDS
-from tasks.kernels.motors import back, hold_here, keep, motor_controls
+from tasks.kernels.motors import back, hold_here, keep, motor_controls, plan, set_controls
 
 #: The controllers, by the kind of the actuators on the joints.
 TORQUE, POSITION, VELOCITY = 0, 1, 2
@@ -76,34 +78,17 @@ def controls(s):
 
 
 @njit(cache=True)
-def joint_phase(s, n):
-    """n substeps of a phase: at each, while ramp_left[0] > 0 the targets move by delta
-    (and ramp_left counts down); the controls (`controls`) go into ctrl; one substep
-    runs. Returns the first non-OK status of tasks.bindings.run, TIPPED when a free base
-    ends the phase tilted past min_cos_tilt, else OK."""
-    target, delta, ramp_left = s.target, s.delta, s.ramp_left
-    for _ in range(n):
-        if ramp_left[0] > 0:
-            target[0] += delta[0]
-            target[1] += delta[1]
-            ramp_left[0] -= 1
-        controls(s)
-        for k in range(s.motors.shape[0]):
-            s.ctrl[s.motors[k]] = s.controls[k]
-        status = bindings.run(s.m, s.d, 1, s.bad_qacc, s.xmat, False, s.min_cos_tilt)
-        if status != bindings.OK:
-            return status
-    if s.free != 0 and s.xmat[8] < s.min_cos_tilt:
-        return bindings.TIPPED
-    return bindings.OK
+def joint_controls(s):
+    """`controls`, into ctrl (the phases are the wheel motors': motors.wheel_phase)."""
+    controls(s)
+    for k in range(s.motors.shape[0]):
+        s.ctrl[s.motors[k]] = s.controls[k]
 
 
-@njit(cache=True)
-def plan(s, forward, turn, n, ramp):
-    """A phase of n substeps whose targets move by (forward, turn) over `ramp`."""
-    s.ramp_left[0] = ramp
-    s.delta[0], s.delta[1] = forward / ramp, turn / ramp
-    return joint_phase(s, n), n
+@overload(set_controls)
+def _set_controls(s):
+    if isinstance(s, JointDrive.numba_type):
+        return lambda s: joint_controls(s)
 
 
 @njit(cache=True)

@@ -94,6 +94,20 @@ def _slides(mount, base):
     return out[(1, 0, 0)], out[(0, 1, 0)]
 
 
+def _refuse_planar(fields, joints, what):
+    """The one-line refusal of joints = "planar" for a kind that drives the file's own
+    motors (planar replaces the base's joints and drops them)."""
+    if joints == "planar":
+        fields.fail("joints", f"{what} (joints = file, free, slides or slides_z); planar "
+                              "replaces the base's joints and drops the file's motors")
+
+
+def _keep_actuators(mount, drop, what):
+    """The one-line refusal of dropping the file's actuators, for a kind that drives them."""
+    if "actuators" in drop:
+        fail(mount.path, "drop", f"{what}: do not drop its actuators")
+
+
 #: The contract's actuator names an "actuators" action maps, by drive, and those it needs.
 ACTUATOR_ROLES = {"two_wheel": ("forward", "turn", "grip"), "floating": ("thrust_x", "thrust_y")}
 REQUIRED_ROLES = {"two_wheel": ("forward", "turn"), "floating": ("thrust_x", "thrust_y")}
@@ -224,18 +238,13 @@ class WheelMotors(Action):
                 *((MOTOR_ROLE.format(k), name) for k, name in enumerate(self.motors)))
 
     def check_joints(self, fields, joints):
-        if joints == "planar":
-            fields.fail("joints", "wheel_motors roll the file's wheels on a free base (joints = "
-                                  "file or free); planar replaces the base's joints and drops the "
-                                  "file's motors")
+        _refuse_planar(fields, joints, "wheel_motors roll the file's wheels on a free base")
 
     def check_file(self, mount, spec, drop, names):
         """The file's wheel hinges and motors (before the drop: its motors and their
         tendons are kept)."""
         import mujoco
-        if "actuators" in drop:
-            fail(mount.path, "drop", "wheel_motors turn the wheels through the file's motors: "
-                                     "do not drop its actuators")
+        _keep_actuators(mount, drop, "wheel_motors turn the wheels through the file's motors")
         hinges = (("left", self.left), ("right", self.right))
         for role, name in hinges:
             self._mappable(mount, f"action.{role}", role, name)
@@ -297,17 +306,13 @@ class JointMotors(Action):
         return {"forward", "turn"} | {k for k in ("kp", "kv") if getattr(self, k) is not None}
 
     def check_joints(self, fields, joints):
-        if joints == "planar":
-            fields.fail("joints", "joint_motors drive the file's own joints (joints = file, "
-                                  "free, slides or slides_z); planar drops the file's motors")
+        _refuse_planar(fields, joints, "joint_motors drive the file's own joints")
 
     def check_file(self, mount, spec, drop, names):
         """The two joints (a hinge or slide forward, a hinge about z to turn) and the
         file's actuators on them, all of one kind, kept; the gains that kind needs."""
         import mujoco
-        if "actuators" in drop:
-            fail(mount.path, "drop", "joint_motors drive the file's own actuators: do not "
-                                     "drop them")
+        _keep_actuators(mount, drop, "joint_motors drive the file's own actuators")
         for role, name in (("forward", self.forward), ("turn", self.turn)):
             joint = spec.joint(name)
             if joint is None:
@@ -439,18 +444,13 @@ class Gait(Action):
         return {"legs"} | {k for k, _ in self.parameters}
 
     def check_joints(self, fields, joints):
-        if joints == "planar":
-            fields.fail("joints", "the gait walks a free base on its own legs (joints = file "
-                                  "or free); planar replaces the base's joints and drops the "
-                                  "file's motors")
+        _refuse_planar(fields, joints, "the gait walks a free base on its own legs")
 
     def check_file(self, mount, spec, drop, names):
         """The listed joints are hinges or slides of the file, each moved by one of its
         actuators (on the joint, or on a tendon over it), which are kept."""
         import mujoco
-        if "actuators" in drop:
-            fail(mount.path, "drop", "the gait walks the legs through the file's own "
-                                     "actuators: do not drop them")
+        _keep_actuators(mount, drop, "the gait walks the legs through the file's own actuators")
         moved = set()
         for act in spec.actuators:
             if act.trntype == mujoco.mjtTrn.mjTRN_JOINT:
