@@ -365,3 +365,24 @@ def test_joint_motors_and_the_quadrupeds_gait_run_the_same_fused_or_not(tmp_path
         a, b = protocol.execute(spec, fused=False), protocol.execute(spec)
         for key in ("trial_ends", "trace", "starts"):
             assert np.array_equal(a[key], b[key]), (robot, key)
+
+
+def test_joint_motors_compiled_step_is_the_hooks_step_a_refused_move_too(tmp_path):
+    """dm_control's hooks (env.compiled = False) and the compiled step give the same
+    states, with blocked_move = "refuse" (a refused move puts the targets back:
+    motors.keep and back), the tricycle started against the east wall."""
+    path = str(_tricycle(tmp_path, "torque"))
+    states = []
+    for compiled in (False, True):
+        env = tasks.load(path, seed=3, blocked_move="refuse")
+        env.compiled = compiled
+        rng = np.random.default_rng(4)
+        env.reset()
+        env.physics.set_robot_pose(90.0 - 2.0, 30.0, 0.0)
+        out = []
+        for _ in range(20):
+            env.step(rng.uniform(-0.3, 0.3, 1))
+            out.append(env.physics.data.qpos.tobytes() + env.physics.data.qvel.tobytes())
+        states.append(out)
+        env.close()
+    assert states[0] == states[1]
