@@ -7,19 +7,23 @@ each part scaled by the action noise. A legged body has
 no velocity servo to command: a hand-built central pattern generator (CPG) walks it, with
 heading feedback. No learned policy.
 
-The CPG is a trot: diagonal legs in phase, the two pairs half a cycle apart. Leg i at
-phase phi (one cycle per 1 / frequency s) holds its hip at
+The CPG is a trot: diagonal legs in phase, the two pairs half a cycle apart. The legs are
+listed by the mount (Leg: a swing joint, one or more lift joints, optional held joints).
+Leg i at phase phi (one cycle per 1 / frequency s) holds its swing joint at
 
-    hip_i = hip_rest_i + amplitude * (forward * f_i + turn * r_i) * -cos(phi)
+    swing_i = swing_rest_i + amplitude * (forward * f_i + turn * r_i) * -cos(phi)
 
-and lifts its foot, ankle_i = ankle_rest_i + lift * lift_i * max(0, -sin(phi)), in the
-half cycle its hip swings back (phi in [pi, 2 pi)). f_i and r_i are each hip's share of a
-stance sweep that pushes the body forward or turns it counter-clockwise (from the hip's
-kinematics at rest: the foot's motion per radian against the -x direction and against the
-clockwise tangent), lift_i the ankle's sign that raises the foot; all are read from the
-model, so the gait needs no leg names beyond its actuators. A PD loop per joint turns the
-targets into the file's motor controls (ctrl = kp (target - q) - kd dq, clipped to the
-motor's range).
+and lifts its foot, lift_j = lift_rest_j + lift * lift_sign_j * max(0, -sin(phi)) for each
+of its lift joints j, in the half cycle its swing goes back (phi in [pi, 2 pi)); a held
+joint stays at rest. f_i and r_i are each swing's share of a stance sweep that pushes the
+body forward or turns it counter-clockwise (from the leg's kinematics at rest: the foot's
+motion per radian against the -x direction and against the clockwise tangent),
+lift_sign_j the sign that raises the foot; all are read from the model, so the gait needs
+no leg names beyond the joints. What moves the joints is read from the model too: a
+torque motor on each gets a PD loop (ctrl = kp (target - q) - kd dq, clipped to the
+motor's range, the Ant's); position servos (on the joints or on tendons over them) get
+their lengths at the targets (each servo's length per radian of each listed joint,
+measured at load; clipped to its range, the suite quadruped's).
 
 Heading feedback: in a turn, turn = clip(heading_gain * (target - heading)), forward = 0,
 until the heading is within turn_tolerance or max_turn_seconds pass. In a move, forward = 1
