@@ -7,19 +7,23 @@ each part scaled by the action noise. A legged body has
 no velocity servo to command: a hand-built central pattern generator (CPG) walks it, with
 heading feedback. No learned policy.
 
-The CPG is a trot: diagonal legs in phase, the two pairs half a cycle apart. Leg i at
-phase phi (one cycle per 1 / frequency s) holds its hip at
+The CPG is a trot: diagonal legs in phase, the two pairs half a cycle apart. The legs are
+listed by the mount (Leg: a swing joint, one or more lift joints, optional held joints).
+Leg i at phase phi (one cycle per 1 / frequency s) holds its swing joint at
 
-    hip_i = hip_rest_i + amplitude * (forward * f_i + turn * r_i) * -cos(phi)
+    swing_i = swing_rest_i + amplitude * (forward * f_i + turn * r_i) * -cos(phi)
 
-and lifts its foot, ankle_i = ankle_rest_i + lift * lift_i * max(0, -sin(phi)), in the
-half cycle its hip swings back (phi in [pi, 2 pi)). f_i and r_i are each hip's share of a
-stance sweep that pushes the body forward or turns it counter-clockwise (from the hip's
-kinematics at rest: the foot's motion per radian against the -x direction and against the
-clockwise tangent), lift_i the ankle's sign that raises the foot; all are read from the
-model, so the gait needs no leg names beyond its actuators. A PD loop per joint turns the
-targets into the file's motor controls (ctrl = kp (target - q) - kd dq, clipped to the
-motor's range).
+and lifts its foot, lift_j = lift_rest_j + lift * lift_sign_j * max(0, -sin(phi)) for each
+of its lift joints j, in the half cycle its swing goes back (phi in [pi, 2 pi)); a held
+joint stays at rest. f_i and r_i are each swing's share of a stance sweep that pushes the
+body forward or turns it counter-clockwise (from the leg's kinematics at rest: the foot's
+motion per radian against the -x direction and against the clockwise tangent),
+lift_sign_j the sign that raises the foot; all are read from the model, so the gait needs
+no leg names beyond the joints. What moves the joints is read from the model too: a
+torque motor on each gets a PD loop (ctrl = kp (target - q) - kd dq, clipped to the
+motor's range, the Ant's); position servos (on the joints or on tendons over them) get
+their lengths at the targets (each servo's length per radian of each listed joint,
+measured at load; clipped to its range, the suite quadruped's).
 
 Heading feedback: in a turn, turn = clip(heading_gain * (target - heading)), forward = 0,
 until the heading is within turn_tolerance or max_turn_seconds pass. In a move, forward = 1
@@ -42,7 +46,8 @@ import numpy as np
 from tasks import navigation
 
 from tasks.kernels.gait import GaitDrive
-from tasks.two_wheel import family_settings
+from tasks.two_wheel import control_ranges, family_settings, is_position_servo, \
+    is_torque_motor, length_gains
 
 #: The gait's parameters (a mount's [action.gait] may set any of them) and defaults.
 PARAMETERS = {
@@ -64,15 +69,19 @@ PARAMETERS = {
     "max_tilt": 30.0,          # degrees: a base tilted further has fallen
 }
 
-#: The gait's actuators by role, as a mount maps them: hip_0..3 and ankle_0..3.
-LEGS = 4
+#: A leg as a mount lists it: its swing joint (moves the foot fore and aft), its lift
+#: joints (raise it), its held joints (an optional yaw, kept at rest); the file's names.
+Leg = tuple[str, tuple[str, ...], tuple[str, ...]]
 
 
 class Physics(navigation.Physics):
-    """A legged base on a free joint, its hips and ankles under the gait's PD loops."""
+    """A legged base on a free joint, its legs' joints under the gait: PD loops onto
+    their torque motors, or their targets onto position servos."""
 
     Record = GaitDrive
     gait = dict(PARAMETERS)
+    #: The legs (Leg), in the mount's order.
+    legs: tuple[Leg, ...] = ()
 
     def _reload_from_data(self, data):
         self._min_cos_tilt = math.cos(math.radians(self.gait["max_tilt"]))
@@ -81,23 +90,8 @@ class Physics(navigation.Physics):
         if self._free is None:
             raise navigation.ContractError("the gait drive needs a base on a free joint")
         mjm = m.ptr
-        act = {}
-        for role in [f"hip_{i}" for i in range(LEGS)] + [f"ankle_{i}" for i in range(LEGS)]:
-            i = navigation.named_id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, role)
-            if i < 0:
-                raise navigation.ContractError(f"the gait drive needs an actuator {role!r}")
-            act[role] = i
-        self._acts = np.array([act[f"hip_{i}"] for i in range(LEGS)]
-                              + [act[f"ankle_{i}"] for i in range(LEGS)], dtype=np.int64)
-        joints = mjm.actuator_trnid[self._acts, 0]
-        self._q = mjm.jnt_qposadr[joints].astype(np.int64)
-        self._dq = mjm.jnt_dofadr[joints].astype(np.int64)
-        self._ctrl_lo = mjm.actuator_ctrlrange[self._acts, 0].copy()
-        self._ctrl_hi = mjm.actuator_ctrlrange[self._acts, 1].copy()
-        unlimited = ~mjm.actuator_ctrllimited[self._acts].astype(bool)
-        self._ctrl_lo[unlimited], self._ctrl_hi[unlimited] = -np.inf, np.inf
-        self._rest = mjm.qpos0[self._q].copy()
-        self._shares(mjm, joints)
+        self._listing(mjm)
+        self._shares(mjm)
         g = self.gait
         k = int(g["control_substeps"])
 
@@ -105,9 +99,11 @@ class Physics(navigation.Physics):
             return max(1, round(seconds / (k * self.timestep)))
 
         self.parts.update(
-            acts=self._acts, q=self._q, dq=self._dq, rest=self._rest, ctrl_lo=self._ctrl_lo,
-            ctrl_hi=self._ctrl_hi, forward_share=self._forward_share,
-            turn_share=self._turn_share, lift_sign=self._lift_sign, offset=self._offset,
+            leg=self._leg, role=self._role, lift_sign=self._lift_sign, q=self._q, dq=self._dq,
+            rest=self._rest, acts=self._acts, ctrl_lo=self._ctrl_lo, ctrl_hi=self._ctrl_hi,
+            forward_share=self._forward_share, turn_share=self._turn_share, offset=self._offset,
+            servos=self._servos, servo_gain=self._servo_gain, servo_rest=self._servo_rest,
+            servo_lo=self._servo_lo, servo_hi=self._servo_hi,
             kp=float(g["kp"]), kd=float(g["kd"]), tick=k * self.timestep, control_substeps=k,
             **{name: float(g[name]) for name in (
                 "amplitude", "lift", "frequency", "heading_gain", "turn_tolerance",
@@ -115,17 +111,83 @@ class Physics(navigation.Physics):
                 "feedback_seconds")},
             n_feedback=ticks(g["feedback_seconds"]), n_settle=ticks(g["settle_seconds"]))
 
-    def _shares(self, mjm, joints):
-        """Each hip's forward and turning shares and each ankle's lift sign, from the
-        kinematics at rest (the foot: the far end of the leg's outermost body)."""
+    def _listing(self, mjm):
+        """The listed joints (each leg's swing, then lifts, then held joints) and what
+        drives them: a torque motor on each (PD loops), or position servos (every servo
+        that moves a listed joint; their controls' change per radian measured from
+        their lengths at rest)."""
+        from tasks.kernels.gait import HELD, LIFT, SWING
+        if not self.legs:
+            raise navigation.ContractError("the gait drive needs legs listed")
+        names, leg, role = [], [], []
+        for i, (swing, lifts, held) in enumerate(self.legs):
+            for r, group in ((SWING, (swing,)), (LIFT, lifts), (HELD, held)):
+                names += group
+                leg += [i] * len(group)
+                role += [r] * len(group)
+        joints = []
+        for name in names:
+            j = mujoco.mj_name2id(mjm, mujoco.mjtObj.mjOBJ_JOINT, navigation.PREFIX + name)
+            if j < 0 or int(mjm.jnt_type[j]) not in (int(mujoco.mjtJoint.mjJNT_HINGE),
+                                                     int(mujoco.mjtJoint.mjJNT_SLIDE)):
+                raise navigation.ContractError(f"the gait drive needs a hinge or slide {name!r}")
+            joints.append(j)
+        self._joints = np.array(joints, dtype=np.int64)
+        self._leg = np.array(leg, dtype=np.int64)
+        self._role = np.array(role, dtype=np.int64)
+        self._q = mjm.jnt_qposadr[self._joints].astype(np.int64)
+        self._dq = mjm.jnt_dofadr[self._joints].astype(np.int64)
+        self._rest = mjm.qpos0[self._q].copy()
+        # what moves each listed joint: the actuators' lengths' change per radian of it
+        gain, lengths = length_gains(mjm, self._q)
+        movers = np.flatnonzero(np.any(gain != 0.0, axis=1))
+        lo, hi = control_ranges(mjm, np.arange(mjm.nu))
+        if all(is_torque_motor(mjm, a) and int(mjm.actuator_trntype[a]) == int(
+                mujoco.mjtTrn.mjTRN_JOINT) for a in movers):
+            acts = np.full(len(joints), -1, dtype=np.int64)
+            for a in movers:
+                acts[list(self._joints).index(mjm.actuator_trnid[a, 0])] = a
+            missing = [names[c] for c in range(len(joints)) if acts[c] < 0 and role[c] != HELD]
+            if missing:
+                raise navigation.ContractError(f"the gait drive needs a motor on joint {missing[0]!r}")
+            self._acts = acts
+            self._servos = np.zeros(0, dtype=np.int64)
+        elif all(is_position_servo(mjm, a) for a in movers):
+            self._acts = np.full(len(joints), -1, dtype=np.int64)
+            self._servos = movers.astype(np.int64)
+        else:
+            raise navigation.ContractError(
+                "the gait drive needs the listed joints moved by torque motors on them "
+                "or by position servos, not a mix nor other actuators")
+        self._ctrl_lo = np.where(self._acts >= 0, lo[self._acts], 0.0)
+        self._ctrl_hi = np.where(self._acts >= 0, hi[self._acts], 0.0)
+        self._servo_gain = gain[self._servos].copy()
+        self._servo_rest = lengths[self._servos].copy()
+        self._servo_lo, self._servo_hi = lo[self._servos], hi[self._servos]
+
+    def _shares(self, mjm):
+        """Each leg's forward and turning shares (its swing joint's) and each lift
+        joint's sign, from the kinematics at rest (the foot: the far end of the leg's
+        outermost body, the first leaf below its last lift joint)."""
+        from tasks.kernels.gait import LIFT, SWING
         d = mujoco.MjData(mjm)
         mujoco.mj_kinematics(mjm, d)
         base = self._base
         rot = d.xmat[base].reshape(3, 3)
+        legs = len(self.legs)
+        swing = [int(np.flatnonzero((self._leg == i) & (self._role == SWING))[0])
+                 for i in range(legs)]
+        lifts = [np.flatnonzero((self._leg == i) & (self._role == LIFT)) for i in range(legs)]
+
+        def outermost(body):
+            children = np.flatnonzero((mjm.body_parentid == body) & (np.arange(mjm.nbody) != body))
+            return body if len(children) == 0 else outermost(int(children[0]))
+
+        feet = [outermost(int(mjm.jnt_bodyid[self._joints[lifts[i][-1]]])) for i in range(legs)]
 
         def foot(leg):
-            # the outermost body below the hip's: its frame plus its geoms' farthest point
-            body = int(mjm.jnt_bodyid[joints[LEGS + leg]])
+            # the outermost body's frame plus its geoms' farthest point
+            body = feet[leg]
             geoms = np.flatnonzero(mjm.geom_bodyid == body)
             points = d.geom_xpos[geoms] if len(geoms) else d.xpos[body][None]
             far = points[np.argmax(np.linalg.norm(points[:, :2] - d.xpos[base][:2], axis=1))]
@@ -137,29 +199,32 @@ class Physics(navigation.Physics):
             mujoco.mj_kinematics(mjm, d)
             return foot(leg)
 
-        self._forward_share = np.zeros(LEGS)
-        self._turn_share = np.zeros(LEGS)
-        self._lift_sign = np.zeros(LEGS)
+        self._forward_share = np.zeros(legs)
+        self._turn_share = np.zeros(legs)
+        self._lift_sign = np.zeros(len(self._q))
         h = 1e-3
-        for leg in range(LEGS):
-            p = moved(self._q[leg], 0.0, leg)
-            dp = (moved(self._q[leg], h, leg) - moved(self._q[leg], -h, leg)) / (2 * h)
+        for leg in range(legs):
+            q = self._q[swing[leg]]
+            p = moved(q, 0.0, leg)
+            dp = (moved(q, h, leg) - moved(q, -h, leg)) / (2 * h)
             # stance pushes the body forward: the foot moves towards -x relative to it
             self._forward_share[leg] = -dp[0] / max(1e-9, np.linalg.norm(dp[:2]))
             # stance turns the body counter-clockwise: the foot moves clockwise about it
             cw = np.array([p[1], -p[0]]) / max(1e-9, math.hypot(p[0], p[1]))
             self._turn_share[leg] = float(dp[:2] @ cw) / max(1e-9, np.linalg.norm(dp[:2]))
-            up = moved(self._q[LEGS + leg], h, leg)[2] - moved(self._q[LEGS + leg], -h, leg)[2]
-            self._lift_sign[leg] = 1.0 if up > 0 else -1.0
+            for c in lifts[leg]:
+                up = moved(self._q[c], h, leg)[2] - moved(self._q[c], -h, leg)[2]
+                self._lift_sign[c] = 1.0 if up > 0 else -1.0
         #: Trot: legs whose feet are diagonal share a phase. Leg i's phase offset, cycles.
         side = np.array([np.sign(foot_xy[1]) for foot_xy in
-                         (moved(self._q[leg], 0.0, leg) for leg in range(LEGS))])
-        front = np.array([np.sign(moved(self._q[leg], 0.0, leg)[0]) for leg in range(LEGS)])
+                         (moved(self._q[swing[leg]], 0.0, leg) for leg in range(legs))])
+        front = np.array([np.sign(moved(self._q[swing[leg]], 0.0, leg)[0]) for leg in range(legs)])
         self._offset = np.where(side * front > 0, 0.0, 0.5)
 
     def episode_settings(self):
         """The CPG's state at an episode's start: phase 0, targets 0; scratch."""
-        return dict(phase=np.zeros(1), target=np.zeros(2 * LEGS), share=np.zeros(LEGS))
+        return dict(phase=np.zeros(1), target=np.zeros(len(self._q)),
+                    share=np.zeros(len(self.legs)))
 
 
 def check_config(config):
@@ -185,6 +250,8 @@ class Gait(navigation.Navigation):
                     **physics.episode_settings())
 
 
-def physics_class(parameters):
-    """gait.Physics with a mount's parameters (a dict of PARAMETERS' names)."""
-    return type("GaitPhysics", (Physics,), {"gait": PARAMETERS | dict(parameters)})
+def physics_class(parameters, legs):
+    """gait.Physics with a mount's parameters (a dict of PARAMETERS' names) and legs (Leg
+    tuples)."""
+    return type("GaitPhysics", (Physics,), {"gait": PARAMETERS | dict(parameters),
+                                            "legs": tuple(legs)})

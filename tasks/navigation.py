@@ -158,7 +158,8 @@ class Physics(dm_mujoco.Physics):
             bad_qacc=bindings.warning_count(data.ptr, mujoco.mjtWarning.mjWARN_BADQACC),
             ctrl=self._ctrl, qpos=self._qpos, qvel=self._qvel, act=self._act,
             sensordata=self._sensordata, xpos=self._xpos, xmat=self._xmat,
-            qyaw=-1 if self._qyaw is None else self._qyaw, free=int(self._free is not None),
+            qyaw=-1 if self._qyaw is None or self._own_joints else self._qyaw,
+            free=int(self._free is not None),
             base=int(self._base), beam0=self._beams.start, beam1=self._beams.stop, unit=unit,
             metres_to_units=1.0 / unit, radius=float(self.robot_radius),
             timestep=self.timestep, min_cos_tilt=float(self._min_cos_tilt), x0=float(x0),
@@ -184,6 +185,7 @@ class Physics(dm_mujoco.Physics):
         joints = [j for j in range(m.njnt) if m.jnt_bodyid[j] == self._base]
         kinds = [int(m.jnt_type[j]) for j in joints]
         self._free = self._qx = self._qy = self._qyaw = None
+        self._own_joints = False
         #: The base's free joint's first dof (x, then y), None for a planar base.
         self.free_dof = None
         #: The base's planar joints by role ("x", "y", "yaw"), as joint ids.
@@ -203,6 +205,10 @@ class Physics(dm_mujoco.Physics):
                 self.base_joints["yaw"] = j
         adr = {role: int(m.jnt_qposadr[j]) for role, j in self.base_joints.items()}
         self._qx, self._qy, self._qyaw = adr.get("x"), adr.get("y"), adr.get("yaw")
+        # Joints of its own beside its planar ones (a mount's root slides added beside
+        # them): its heading is then read from its frame, as for a free joint, and a pose
+        # is set from the file's rest.
+        self._own_joints = len(joints) > len(self.base_joints)
         if self._qx is None or self._qy is None:
             raise ContractError("the base body needs a free joint, or slide joints along "
                                 "x and y (and optionally a hinge about z)")
@@ -284,6 +290,8 @@ class Physics(dm_mujoco.Physics):
             q[a: a + 3] = x * self.unit, y * self.unit, self._rest_height
             q[a + 3: a + 7] = math.cos(heading / 2), 0.0, 0.0, math.sin(heading / 2)
         else:
+            if self._own_joints:
+                q[:] = self._mj[0].qpos0
             q[self._qx], q[self._qy] = x * self.unit, y * self.unit
             if self._qyaw is not None:
                 q[self._qyaw] = heading

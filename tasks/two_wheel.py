@@ -16,6 +16,9 @@ realisations here say how a body turns and moves (their kernels: tasks.kernels.p
   (`diff_drive`).
 - `MotorWheelPhysics`: a mount's wheel hinges under the file's own motors
   (action kind "wheel_motors": the MuJoCo car, models/mounts/car.toml).
+- `JointMotorPhysics`: a mount's forward and turn joints under the file's own torque
+  motors, position servos or velocity servos (action kind "joint_motors";
+  tasks.kernels.joints).
 tasks.gait walks the same family with legs.
 """
 import mujoco
@@ -23,6 +26,7 @@ import numpy as np
 
 from tasks import navigation
 from tasks.config import BLOCKED_MOVES, LEFTOVER_TURNS
+from tasks.kernels.joints import MODES, POSITION, TORQUE, VELOCITY, JointDrive
 from tasks.kernels.motors import MotorWheelDrive, gram, hold_here
 from tasks.kernels.planar import PlanarDrive
 from tasks.kernels.wheels import WheelDrive, ramp_substeps
@@ -223,6 +227,133 @@ def motor_forces(model, motors, dofs):
     finally:
         model.opt.disableflags = flags
     return forces
+
+
+def is_torque_motor(model, a):
+    """Whether actuator a is a torque motor (MuJoCo's <motor>: fixed gain, no bias, no
+    activation dynamics)."""
+    return (int(model.actuator_biastype[a]) == int(mujoco.mjtBias.mjBIAS_NONE)
+            and int(model.actuator_gaintype[a]) == int(mujoco.mjtGain.mjGAIN_FIXED)
+            and int(model.actuator_dyntype[a]) == int(mujoco.mjtDyn.mjDYN_NONE))
+
+
+def is_position_servo(model, a):
+    """Whether actuator a is a position servo (MuJoCo's <position>, or a <general> of
+    bias -kp * length, any damping): its control is the length it holds."""
+    return (int(model.actuator_biastype[a]) == int(mujoco.mjtBias.mjBIAS_AFFINE)
+            and int(model.actuator_gaintype[a]) == int(mujoco.mjtGain.mjGAIN_FIXED)
+            and model.actuator_biasprm[a, 0] == 0.0
+            and model.actuator_biasprm[a, 1] == -model.actuator_gainprm[a, 0] != 0.0)
+
+
+def is_velocity_servo(model, a):
+    """Whether actuator a is a velocity servo (MuJoCo's <velocity>: bias -kv * speed, no
+    position term, no activation dynamics): its control is the speed it holds."""
+    return (int(model.actuator_biastype[a]) == int(mujoco.mjtBias.mjBIAS_AFFINE)
+            and int(model.actuator_gaintype[a]) == int(mujoco.mjtGain.mjGAIN_FIXED)
+            and int(model.actuator_dyntype[a]) == int(mujoco.mjtDyn.mjDYN_NONE)
+            and model.actuator_biasprm[a, 0] == 0.0 and model.actuator_biasprm[a, 1] == 0.0
+            and model.actuator_biasprm[a, 2] == -model.actuator_gainprm[a, 0] != 0.0)
+
+
+def length_gains(model, qadrs):
+    """(gain, lengths): gain[a, j] every actuator's length per unit of the joint at qpos
+    address qadrs[j] (central differences at the rest pose, entries under 1e-9 zeroed),
+    and the actuators' lengths at rest. For a joint or a fixed tendon this is the
+    transmission's gear times coefficient, whatever the actuator's kind."""
+    d = mujoco.MjData(model)
+    gain = np.zeros((model.nu, len(qadrs)))
+    h = 1e-3
+    for c, q in enumerate(qadrs):
+        lengths = []
+        for delta in (h, -h):
+            d.qpos[:] = model.qpos0
+            d.qpos[q] += delta
+            mujoco.mj_fwdPosition(model, d)
+            lengths.append(d.actuator_length.copy())
+        gain[:, c] = (lengths[0] - lengths[1]) / (2 * h)
+    gain[np.abs(gain) < 1e-9] = 0.0
+    d.qpos[:] = model.qpos0
+    mujoco.mj_fwdPosition(model, d)
+    return gain, d.actuator_length.copy()
+
+
+def control_ranges(model, actuators):
+    """(lo, hi): the actuators' control ranges, infinite where unlimited."""
+    lo = model.actuator_ctrlrange[actuators, 0].copy()
+    hi = model.actuator_ctrlrange[actuators, 1].copy()
+    unlimited = ~model.actuator_ctrllimited[actuators].astype(bool)
+    lo[unlimited], hi[unlimited] = -np.inf, np.inf
+    return lo, hi
+
+
+class JointMotorPhysics(WheelPlan):
+    """A mount's forward and turn joints (the file's names: `joints`) under the file's
+    own actuators on them, all torque motors, position servos or velocity servos: the
+    wheels' plan on the joints' targets and a controller per kind
+    (tasks.kernels.joints)."""
+
+    Record = JointDrive
+    #: Set by joint_motor_physics from the mount: the file's forward and turn joints,
+    #: the gains (torque motors: kp N m/rad and kv N m s/rad; velocity servos: kp 1/s).
+    joints = ("", "")
+    kp = 0.0
+    kv = 0.0
+
+    def _reload_from_data(self, data):
+        super()._reload_from_data(data)
+        mjm = self.model.ptr
+        ids = [mujoco.mj_name2id(mjm, mujoco.mjtObj.mjOBJ_JOINT, navigation.PREFIX + name)
+               for name in self.joints]
+        if min(ids) < 0:
+            raise navigation.ContractError(f"joint motors need the joints {list(self.joints)}")
+        q = mjm.jnt_qposadr[ids].astype(np.int64)
+        dof = mjm.jnt_dofadr[ids].astype(np.int64)
+        gain, lengths = length_gains(mjm, q)
+        motors = np.flatnonzero(np.any(gain != 0.0, axis=1)).astype(np.int64)
+        kinds = [k for k, test in zip((TORQUE, POSITION, VELOCITY),
+                                      (is_torque_motor, is_position_servo, is_velocity_servo))
+                 if len(motors) and all(test(mjm, a) for a in motors)]
+        if not kinds:
+            raise navigation.ContractError(
+                f"joint motors need the joints {list(self.joints)} moved by actuators of one "
+                f"kind: {', '.join(MODES)}")
+        mode = kinds[0]
+        forces = motor_forces(mjm, motors, dof) if mode == TORQUE else np.zeros((len(motors), 2))
+        mtm = gram(forces)
+        if mode == TORQUE and abs(mtm[3]) <= 1e-12 * max(1e-300, mtm[0] + mtm[2]) ** 2:
+            raise navigation.ContractError(
+                "joint motors: the motors do not move the two joints independently (force "
+                f"per unit control on them: {forces.tolist()})")
+        ctrl_lo, ctrl_hi = control_ranges(mjm, motors)
+        forward, turn = ids
+        if int(mjm.jnt_type[forward]) == int(mujoco.mjtJoint.mjJNT_HINGE):
+            # a wheel: its body's first geom's radius
+            body = int(mjm.jnt_bodyid[forward])
+            geom = int(np.flatnonzero(mjm.geom_bodyid == body)[0])
+            per_unit = self.unit / float(mjm.geom_size[geom, 0])
+        else:
+            per_unit = self.unit
+        self._joint_q = q
+        #: The plan's state: the joints' targets and the ramp's substeps left.
+        self._target, self._ramp_left = np.zeros(2), np.zeros(1, dtype=np.int64)
+        self.parts.update(
+            joint_per_unit=per_unit, per_rad=1.0, joint_q=q, joint_dof=dof, rest=mjm.qpos0[q].copy(),
+            motors=motors, mode=mode, forces=forces, gram=mtm, gain=gain[motors].copy(),
+            length0=lengths[motors].copy(), ctrl_lo=ctrl_lo, ctrl_hi=ctrl_hi,
+            kp=float(self.kp), kv=float(self.kv), target=self._target, delta=np.zeros(2),
+            ramp_left=self._ramp_left, tau=np.zeros(2), controls=np.zeros(len(motors)),
+            target0=np.zeros(2), ramp_left0=np.zeros(1, dtype=np.int64))
+
+    def set_robot_pose(self, x, y, heading=0.0):
+        super().set_robot_pose(x, y, heading)
+        hold_here(self._target, self._ramp_left, self._qpos, self._joint_q)
+
+
+def joint_motor_physics(joints, kp, kv):
+    """JointMotorPhysics with a joint_motors mount's joints (forward, turn) and gains."""
+    return type("JointMotorPhysics", (JointMotorPhysics,),
+                {"joints": tuple(joints), "kp": kp, "kv": kv})
 
 
 def motor_wheel_physics(motor_count, kp, kv):

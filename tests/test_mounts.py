@@ -20,6 +20,7 @@ SOURCES = {
     "point_mass": lambda: importlib.resources.files("dm_control") / "suite/point_mass.xml",
     "car": lambda: ROOT / "models" / "vendor" / "mujoco_car" / "car.xml",
     "ant": lambda: importlib.resources.files("dm_control") / "third_party/ant/ant.xml",
+    "quadruped": lambda: importlib.resources.files("dm_control") / "suite/quadruped.xml",
 }
 #: model/car/car.xml's git blob in google-deepmind/mujoco (last changed upstream in a276c49).
 CAR_BLOB = "0ab791f05ad6b022e573a7bb13af6aa0efdddc1d"
@@ -176,9 +177,9 @@ BAD = [
     (CAR.replace('drop = ["world", "lights"]', 'drop = ["world", "actuators"]'),
      "drop: wheel_motors turn the wheels through the file's motors"),
     (CAR.replace('joints = "file"', 'joints = "planar"'), "joints: wheel_motors roll the file's wheels"),
-    ((MOUNTS / "ant.toml").read_text().replace('hip_3 = "back_left_hip"\n', "").replace(
+    ((MOUNTS / "ant.toml").read_text().replace('lift = "back_left_ankle"\n', "").replace(
         '"dm_control:', '"{{ant}}').replace("third_party/ant/ant.xml", ""),
-     "action.hip_3: missing: the file's motor for it"),
+     "action.legs[3].lift: missing: the file's joint(s) for it"),
     ((MOUNTS / "ant.toml").read_text().replace("frequency = 1.0", "speed = 1.0").replace(
         '"dm_control:', '"{{ant}}').replace("third_party/ant/ant.xml", ""),
      "action.gait.speed: unknown key"),
@@ -188,7 +189,8 @@ BAD = [
 def test_each_action_kind_is_one_registered_class_and_a_mount_is_named_records():
     """The drives take the kinds in their registration order (the errors list them so);
     the shipped mounts parse to named records, by kind."""
-    assert mount.ACTIONS == {"two_wheel": ("servos", "actuators", "wheels", "wheel_motors", "gait"),
+    assert mount.ACTIONS == {"two_wheel": ("servos", "actuators", "wheels", "wheel_motors",
+                                           "joint_motors", "gait"),
                              "floating": ("thrusters", "actuators")}
     for name, kind in mount.KINDS.items():
         assert kind.name == name and issubclass(kind, mount.Action)
@@ -198,7 +200,7 @@ def test_each_action_kind_is_one_registered_class_and_a_mount_is_named_records()
     assert car.bumper == mount.Bumper(shape="sphere", radius=0.12)
     assert car.beams == mount.Beams(height=0.04) and car.beams.added
     ant = mount.parse(MOUNTS / "ant.toml")
-    assert ant.action.name == "gait" and len(ant.action.motors) == 8
+    assert ant.action.name == "gait" and len(ant.action.legs) == 4
     assert dict(ant.action.parameters) == {"frequency": 1.0, "control_substeps": 1.0}
     point, point_mass = mount.parse(MOUNTS / "point.toml"), mount.parse(MOUNTS / "point_mass.toml")
     assert point.bumper == mount.Bumper(geom="pointbody") and point.action == mount.KINDS["servos"]()
@@ -322,7 +324,7 @@ def test_an_installed_copy_finds_the_shipped_mounts_and_behaviours_by_name(tmp_p
                     str(target), str(source)], check=True, capture_output=True)
     code = ("import tasks, ebrl.behaviour as b\n"
             "assert tasks.__file__.startswith(%r)\n"
-            "assert sorted(tasks.MOUNTS) == ['ant', 'car', 'point', 'point_mass']\n"
+            "assert sorted(tasks.MOUNTS) == ['ant', 'car', 'point', 'point_mass', 'quadruped']\n"
             "assert tasks.resolve('car').model.is_relative_to(%r)\n"
             "env = tasks.load('car'); env.reset(); env.step([0.0]); env.close()\n"
             "print(b.load('paper_eq8').behaviour, b.load('behaviours/paper_eq9-10.json').behaviour)\n"

@@ -9,7 +9,7 @@ The mirror of ebrl/kernels.py for the simulator side, one module per job:
 | `stream` | the task's random stream (numpy's legacy draws, buffered) |
 | `body` | what every drive's record holds and the kernels every drive shares (goal, codes, noise) |
 | `two_wheel` | the two-wheel action family's step, written once |
-| `planar`, `wheels`, `motors`, `gait` | the family's realisations: how a body turns and moves |
+| `planar`, `wheels`, `motors`, `gait`, `joints` | the family's realisations: how a body turns and moves |
 | `floating` | the floating drive's step |
 | `steps` | the entry points: a whole agent step (`step`), a drive's action (`act`) |
 

@@ -21,11 +21,16 @@ from tasks.kernels import two_wheel as family
 
 @records.record(
     *BODY_FIELDS, *family.FAMILY_FIELDS,
-    # the 4 hips' then the 4 ankles' actuators, their joints' qpos and dof addresses,
-    # the joints' rest angles, the controls' ranges; each hip's forward and turning
-    # shares and each ankle's lift sign; each leg's phase offset (cycles)
-    "acts", "q", "dq", "rest", "ctrl_lo", "ctrl_hi", "forward_share", "turn_share",
-    "lift_sign", "offset",
+    # per listed joint (tasks.gait.Physics: each leg's swing, lift and held joints):
+    # its leg, its role (SWING, LIFT, HELD), the sign that raises the foot (a lift
+    # joint's), its qpos and dof addresses and rest angle; its torque motor (-1: none)
+    # and that motor's control range; per leg: the swing's forward and turning shares,
+    # the phase offset (cycles); the position servos: their actuators, their controls'
+    # change per radian of each listed joint (servos x joints), their controls at rest
+    # and ranges
+    "leg", "role", "lift_sign", "q", "dq", "rest", "acts", "ctrl_lo", "ctrl_hi",
+    "forward_share", "turn_share", "offset", "servos", "servo_gain", "servo_rest",
+    "servo_lo", "servo_hi",
     # the gait's parameters (tasks.gait.PARAMETERS): PD gains, seconds per control tick,
     # the CPG's amplitude, lift and frequency, the heading feedback, the move's
     # slow-down and coast, the phases' time limits, the feedback's ticks per update and
@@ -56,26 +61,43 @@ def remainder(x, y):
     return r
 
 
+#: A listed joint's role in its leg (tasks.gait.Physics): the swing that moves the foot
+#: fore and aft, a lift that raises it, a joint held at rest (an optional yaw).
+SWING, LIFT, HELD = 0, 1, 2
+
+
 @njit(cache=True)
 def walk(s, n, amp, lift, freq):
-    """n ticks of the trot: each sets the 4 hips' and 4 ankles' targets from the phase
-    (the hips' shares in s.share), the motors' controls by PD (clipped to their ranges),
-    runs control_substeps substeps and advances the phase by frequency * tick seconds.
+    """n ticks of the trot: each sets the listed joints' targets from the phase (the
+    legs' shares in s.share), the torque motors' controls by PD and the position servos'
+    to their targets (clipped to their ranges), runs control_substeps substeps and
+    advances the phase by frequency * tick seconds.
     Returns (the first non-OK status of tasks.bindings.run (a fall: TIPPED), else OK;
     the substeps run)."""
     kp, kd, tick = s.kp, s.kd, s.tick
     k = s.control_substeps
     phase, target, share, rest, qpos, qvel = s.phase, s.target, s.share, s.rest, s.qpos, s.qvel
-    legs = len(share)
+    joints = len(target)
     for t in range(n):
-        for i in range(legs):
+        for j in range(joints):
+            i = s.leg[j]
             phi = 2.0 * math.pi * (phase[0] + s.offset[i])
-            target[i] = rest[i] + amp * share[i] * -math.cos(phi)
-            v = -math.sin(phi)
-            target[legs + i] = rest[legs + i] + lift * s.lift_sign[i] * (v if v > 0.0 else 0.0)
-        for j in range(2 * legs):
-            u = kp * (target[j] - qpos[s.q[j]]) - kd * qvel[s.dq[j]]
-            s.ctrl[s.acts[j]] = min(max(u, s.ctrl_lo[j]), s.ctrl_hi[j])
+            if s.role[j] == SWING:
+                target[j] = rest[j] + amp * share[i] * -math.cos(phi)
+            elif s.role[j] == LIFT:
+                v = -math.sin(phi)
+                target[j] = rest[j] + lift * s.lift_sign[j] * (v if v > 0.0 else 0.0)
+            else:
+                target[j] = rest[j]
+        for j in range(joints):
+            if s.acts[j] >= 0:
+                u = kp * (target[j] - qpos[s.q[j]]) - kd * qvel[s.dq[j]]
+                s.ctrl[s.acts[j]] = min(max(u, s.ctrl_lo[j]), s.ctrl_hi[j])
+        for a in range(len(s.servos)):
+            u = s.servo_rest[a]
+            for j in range(joints):
+                u += s.servo_gain[a, j] * (target[j] - rest[j])
+            s.ctrl[s.servos[a]] = min(max(u, s.servo_lo[a]), s.servo_hi[a])
         status = bindings.run(s.m, s.d, k, s.bad_qacc, s.xmat, True, s.min_cos_tilt)
         if status != bindings.OK:
             return status, n * k

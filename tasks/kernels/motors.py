@@ -8,6 +8,7 @@ tau = kp (target - q) - kv dq, and the motors' controls that give them
 (`motor_controls`, clipped to each motor's range)."""
 import numpy as np
 from numba import njit
+from numba.extending import overload
 
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl import records
@@ -64,27 +65,47 @@ def motor_controls(forces, mtm, tau, lo, hi, c):
         c[k] = min(max(forces[k, 0] * y0 + forces[k, 1] * y1, lo[k]), hi[k])
 
 
+def set_controls(s):
+    """The actuators' controls for the targets, into ctrl: overloaded for each record type
+    that runs `wheel_phase` (the wheel motors': `wheel_controls`; the joint motors':
+    tasks.kernels.joints.joint_controls)."""
+    raise NotImplementedError("overloaded for each record type")
+
+
 @njit(cache=True)
-def wheel_phase(s, n):
-    """n substeps of a phase: at each, while ramp_left[0] > 0 the wheels' targets move by
-    delta (and ramp_left counts down); the desired wheel torques are
-    tau = kp (target - q) - kv dq; the motors' controls (motor_controls) go into ctrl;
-    one substep runs (tasks.bindings.run). Returns the first non-OK status of run
-    (UNSTABLE), TIPPED when a free base ends the phase tilted past min_cos_tilt
-    (checked at the end, as a phase's substeps check it), else OK."""
-    target, delta, ramp_left, tau, c = s.target, s.delta, s.ramp_left, s.tau, s.controls
+def wheel_controls(s):
+    """The desired wheel torques tau = kp (target - q) - kv dq, the motors' controls that
+    give them (motor_controls), into ctrl."""
+    target, tau, c = s.target, s.tau, s.controls
     qpos, qvel, ctrl, qadr, dofadr, motors = s.qpos, s.qvel, s.ctrl, s.wheel_q, s.wheel_dof, s.motors
     kp, kv = s.kp, s.kv
+    for j in range(2):
+        tau[j] = kp * (target[j] - qpos[qadr[j]]) - kv * qvel[dofadr[j]]
+    motor_controls(s.forces, s.gram, tau, s.ctrl_lo, s.ctrl_hi, c)
+    for k in range(motors.shape[0]):
+        ctrl[motors[k]] = c[k]
+
+
+@overload(set_controls)
+def _set_controls(s):
+    if isinstance(s, MotorWheelDrive.numba_type):
+        return lambda s: wheel_controls(s)
+
+
+@njit(cache=True)
+def wheel_phase(s, n):
+    """n substeps of a phase: at each, while ramp_left[0] > 0 the two targets move by
+    delta (and ramp_left counts down); the controls for them go into ctrl
+    (`set_controls`); one substep runs (tasks.bindings.run). Returns the first non-OK
+    status of run (UNSTABLE), TIPPED when a free base ends the phase tilted past
+    min_cos_tilt (checked at the end, as a phase's substeps check it), else OK."""
+    target, delta, ramp_left = s.target, s.delta, s.ramp_left
     for _ in range(n):
         if ramp_left[0] > 0:
             target[0] += delta[0]
             target[1] += delta[1]
             ramp_left[0] -= 1
-        for j in range(2):
-            tau[j] = kp * (target[j] - qpos[qadr[j]]) - kv * qvel[dofadr[j]]
-        motor_controls(s.forces, s.gram, tau, s.ctrl_lo, s.ctrl_hi, c)
-        for k in range(motors.shape[0]):
-            ctrl[motors[k]] = c[k]
+        set_controls(s)
         status = bindings.run(s.m, s.d, 1, s.bad_qacc, s.xmat, False, s.min_cos_tilt)
         if status != bindings.OK:
             return status
@@ -95,7 +116,7 @@ def wheel_phase(s, n):
 
 @njit(cache=True)
 def plan(s, left, right, n, ramp):
-    """A phase of n substeps whose targets move by (left, right) rad over `ramp`."""
+    """A phase of n substeps whose two targets move by (left, right) over `ramp`."""
     s.ramp_left[0] = ramp
     s.delta[0], s.delta[1] = left / ramp, right / ramp
     return wheel_phase(s, n), n

@@ -6,7 +6,7 @@ tasks.navigation.Navigation.compiled_step and the protocol's compiled loop
 (experiments.running.fused) run it; `act` is the drive's action alone, as the hooks'
 before_step runs it. Both dispatch on the record's type: the floating drive's
 (tasks.kernels.floating.act) or the two-wheel family's (tasks.kernels.two_wheel.act) on
-one of its realisations (planar, wheels, motors, gait). This module imports every
+one of its realisations (planar, wheels, motors, gait, joints). This module imports every
 drive's kernels, so numba's cache of these entry points follows an edit of any of them
 (ebrl.compiled).
 """
@@ -14,12 +14,13 @@ from numba import njit
 from numba.extending import overload
 
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
-from tasks.kernels import bindings, body, floating, gait, motors, planar, sensing, two_wheel, \
-    wheels
+from tasks.kernels import bindings, body, floating, gait, joints, motors, planar, sensing, \
+    two_wheel, wheels
 
 #: The two-wheel family's realisations' record types.
 TWO_WHEEL_RECORDS = tuple(r.numba_type for r in (planar.PlanarDrive, wheels.WheelDrive,
-                                                 motors.MotorWheelDrive, gait.GaitDrive))
+                                                 motors.MotorWheelDrive, gait.GaitDrive,
+                                                 joints.JointDrive))
 
 
 def drive_act(s, action, u):

@@ -16,17 +16,20 @@ tasks.navigation reads, so a mounted model is as self-describing as a contract f
     drive = "two_wheel"                 # a key of ACTIONS (tasks.robots.DRIVES)
     unit = 0.3333333333333333           # metres per paper unit (default 0.1)
     base = "torso"                      # the body whose frame is the robot's pose
-    joints = "file"                     # "file" (the base's own), "free", "planar"
+    joints = "file"                     # "file" (the base's own), "free", "planar",
+                                        # "slides", "slides_z" (added beside the base's own)
     drop = ["world", "lights", "skybox", "actuators"]
     keep_options = []                   # of the file's <option>: timestep, integrator, flags
     time_scale = 1.0                    # also timestep, integrator: the registry's fields
+    condim = 3                          # the robot geoms' condim (default: the file's)
     [bumper]                            # geom = "a geom of the file", or an added shape:
     geom = "pointbody"                  # shape = "sphere" | "capsule", radius, height (m)
     [beams]                             # height = 0.5 (added, the drive's arrangement), or
     height = 0.5                        # sensors = [the file's rangefinders, in order]
     [action]
     kind = "servos"                     # a kind of KINDS: servos, thrusters,
-                                        # actuators, wheels, wheel_motors, gait
+                                        # actuators, wheels, wheel_motors,
+                                        # joint_motors, gait ([[action.legs]])
     [readings]                          # TaskConfig or agent fields (Robot.readings)
 
 Every error is one line, ``<mount file>: <field>: <what is wrong>`` (MountError).

@@ -12,7 +12,7 @@ import dataclasses
 
 from tasks.mount.fields import fail
 from tasks.mount.records import Action, Classes
-from tasks.mount.spec import actuator, file_actuator
+from tasks.mount.spec import actuator, by_name, file_actuator
 
 #: The action kinds by name, in their registration order (the order ACTIONS lists them).
 KINDS: dict[str, type[Action]] = {}
@@ -92,6 +92,20 @@ def _slides(mount, base):
         fail(mount.path, "action.kind", f"thrusters push slides along x and y on {mount.base!r}; "
                                         "it has none (joints = \"planar\" adds them)")
     return out[(1, 0, 0)], out[(0, 1, 0)]
+
+
+def _refuse_planar(fields, joints, what):
+    """The one-line refusal of joints = "planar" for a kind that drives the file's own
+    motors (planar replaces the base's joints and drops them)."""
+    if joints == "planar":
+        fields.fail("joints", f"{what} (joints = file, free, slides or slides_z); planar "
+                              "replaces the base's joints and drops the file's motors")
+
+
+def _keep_actuators(mount, drop, what):
+    """The one-line refusal of dropping the file's actuators, for a kind that drives them."""
+    if "actuators" in drop:
+        fail(mount.path, "drop", f"{what}: do not drop its actuators")
 
 
 #: The contract's actuator names an "actuators" action maps, by drive, and those it needs.
@@ -224,18 +238,13 @@ class WheelMotors(Action):
                 *((MOTOR_ROLE.format(k), name) for k, name in enumerate(self.motors)))
 
     def check_joints(self, fields, joints):
-        if joints == "planar":
-            fields.fail("joints", "wheel_motors roll the file's wheels on a free base (joints = "
-                                  "file or free); planar replaces the base's joints and drops the "
-                                  "file's motors")
+        _refuse_planar(fields, joints, "wheel_motors roll the file's wheels on a free base")
 
     def check_file(self, mount, spec, drop, names):
         """The file's wheel hinges and motors (before the drop: its motors and their
         tendons are kept)."""
         import mujoco
-        if "actuators" in drop:
-            fail(mount.path, "drop", "wheel_motors turn the wheels through the file's motors: "
-                                     "do not drop its actuators")
+        _keep_actuators(mount, drop, "wheel_motors turn the wheels through the file's motors")
         hinges = (("left", self.left), ("right", self.right))
         for role, name in hinges:
             self._mappable(mount, f"action.{role}", role, name)
@@ -264,19 +273,126 @@ class WheelMotors(Action):
         return Classes(None, two_wheel.motor_wheel_physics(len(self.motors), self.kp, self.kv))
 
 
-#: A gait's motors by contract name: hip_0..3, then ankle_0..3 (tasks.gait.LEGS = 4 legs).
-GAIT_ROLES = tuple(f"{j}_{i}" for j in ("hip", "ankle") for i in range(4))
+@register("joint_motors")
+@dataclasses.dataclass(frozen=True)
+class JointMotors(Action):
+    """The file's own actuators on two named joints, none added: `forward` (a wheel's
+    hinge rolling on the floor, or a slide along the base's heading) and `turn` (a hinge
+    about z that turns the base), driven by a controller on their targets for torque
+    motors, position servos or velocity servos (tasks.two_wheel.JointMotorPhysics)."""
+    drives = ("two_wheel",)
+    keys = frozenset({"forward", "turn", "kp", "kv"})
+    forward: str = ""
+    turn: str = ""
+    kp: float | None = None         # torque motors: N m/rad (PD); velocity servos: 1/s (P)
+    kv: float | None = None         # torque motors: N m s/rad
+
+    @classmethod
+    def parse(cls, fields, table, drive):
+        joints = {}
+        for role in ("forward", "turn"):
+            if role not in table:
+                fields.fail(f"action.{role}", "missing: the file's joint for it")
+            joints[role] = fields.text(table, role, f"action.{role}")
+        if joints["forward"] == joints["turn"]:
+            fields.fail("action.turn", f"joint {joints['turn']!r} is the forward joint too")
+        kp = fields.number(table, "kp", "action.kp")
+        kv = fields.number(table, "kv", "action.kv", positive=False)
+        if kv is not None and kv < 0:
+            fields.fail("action.kv", f"must not be negative, got {kv!r}")
+        return cls(**joints, kp=kp, kv=kv)
+
+    def claimed(self):
+        return {"forward", "turn"} | {k for k in ("kp", "kv") if getattr(self, k) is not None}
+
+    def check_joints(self, fields, joints):
+        _refuse_planar(fields, joints, "joint_motors drive the file's own joints")
+
+    def check_file(self, mount, spec, drop, names):
+        """The two joints (a hinge or slide forward, a hinge about z to turn) and the
+        file's actuators on them, all of one kind, kept; the gains that kind needs."""
+        import mujoco
+        _keep_actuators(mount, drop, "joint_motors drive the file's own actuators")
+        for role, name in (("forward", self.forward), ("turn", self.turn)):
+            joint = spec.joint(name)
+            if joint is None:
+                fail(mount.path, f"action.{role}", f"no joint named {name!r} in {mount.model}")
+            kinds = ((mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE) if role == "forward"
+                     else (mujoco.mjtJoint.mjJNT_HINGE,))
+            if joint.type not in kinds:
+                fail(mount.path, f"action.{role}", f"joint {name!r} is not a "
+                                                   + ("hinge or a slide" if role == "forward" else "hinge"))
+        on = [a for a in spec.actuators if _moves(spec, a, {self.forward, self.turn})]
+        for role, name in (("forward", self.forward), ("turn", self.turn)):
+            if not any(_moves(spec, a, {name}) for a in on):
+                fail(mount.path, f"action.{role}", f"no actuator of {mount.model.name} moves "
+                                                   f"joint {name!r}")
+        kind = {_kind(a) for a in on}
+        if len(kind) != 1 or None in kind:
+            fail(mount.path, "action.kind", "joint_motors need the joints' actuators all torque "
+                                            "motors, position servos or velocity servos; got "
+                                            + ", ".join(f"{a.name!r}: {_kind(a) or 'other'}" for a in on))
+        kind = kind.pop()
+        need = {"torque motors": ("kp", "kv"), "velocity servos": ("kp",), "position servos": ()}[kind]
+        for k in ("kp", "kv"):
+            if k in need and getattr(self, k) is None:
+                fail(mount.path, f"action.{k}", f"missing: the {kind}' gain (a robot's own)")
+            if k not in need and getattr(self, k) is not None:
+                fail(mount.path, f"action.{k}", f"not a gain of {kind} (they hold their "
+                                                "targets with their own)")
+
+    def classes(self, mount):
+        from tasks import two_wheel
+        return Classes(None, two_wheel.joint_motor_physics(
+            (self.forward, self.turn), self.kp or 0.0, self.kv or 0.0))
+
+
+def _moves(spec, act, joints):
+    """Whether the spec's actuator acts on one of the joints (directly or by a tendon)."""
+    import mujoco
+    if act.trntype == mujoco.mjtTrn.mjTRN_JOINT:
+        return act.target in joints
+    if act.trntype == mujoco.mjtTrn.mjTRN_TENDON:
+        tendon = by_name(spec.tendons, act.target)
+        return tendon is not None and any(
+            w.type == mujoco.mjtWrap.mjWRAP_JOINT and w.target.name in joints for w in tendon.path)
+    return False
+
+
+def _kind(act):
+    """A spec's actuator's kind as joint_motors names it, None for another."""
+    import mujoco
+    fixed = act.gaintype == mujoco.mjtGain.mjGAIN_FIXED
+    if not fixed:
+        return None
+    if act.biastype == mujoco.mjtBias.mjBIAS_NONE and act.dyntype == mujoco.mjtDyn.mjDYN_NONE:
+        return "torque motors"
+    if act.biastype != mujoco.mjtBias.mjBIAS_AFFINE:
+        return None
+    kp = act.gainprm[0]
+    if act.biasprm[0] == 0 and act.biasprm[1] == -kp != 0:
+        return "position servos"
+    if (act.biasprm[0] == 0 and act.biasprm[1] == 0 and act.biasprm[2] == -kp != 0
+            and act.dyntype == mujoco.mjtDyn.mjDYN_NONE):
+        return "velocity servos"
+    return None
+
+
+#: A gait leg's keys ([[action.legs]]): its swing joint, its lift joint or joints, its
+#: held joint or joints (an optional yaw, kept at rest): tasks.gait.Leg.
+LEG_KEYS = ("swing", "lift", "yaw")
 
 
 @register("gait")
 @dataclasses.dataclass(frozen=True)
 class Gait(Action):
-    """The gait drive (tasks.gait): a legged robot's own hip and ankle motors walk the
-    two-wheel action family."""
+    """The gait drive (tasks.gait): a legged robot's legs, listed with their joints by
+    role, walk the two-wheel action family through the file's own torque motors or
+    position servos."""
     drives = ("two_wheel",)
-    keys = frozenset({"gait", *GAIT_ROLES})
-    #: (contract name, the file's motor) pairs, those given, in GAIT_ROLES' order.
-    motors: tuple[tuple[str, str], ...] = ()
+    keys = frozenset({"gait", "legs"})
+    #: The legs, as tasks.gait.Leg tuples (swing, lifts, held), in the mount's order.
+    legs: tuple[tuple[str, tuple[str, ...], tuple[str, ...]], ...] = ()
     #: The [action.gait] table: (parameter, value) pairs, sorted (tasks.gait.PARAMETERS).
     parameters: tuple[tuple[str, float], ...] = ()
 
@@ -285,7 +401,35 @@ class Gait(Action):
         import math
 
         from tasks import gait
-        motors = tuple((r, fields.text(table, r, f"action.{r}")) for r in GAIT_ROLES if r in table)
+        listed = table.get("legs")
+        if listed is None:
+            fields.fail("action.legs", "missing: the legs, as [[action.legs]] tables of "
+                                       "swing, lift (and yaw) joints")
+        if not isinstance(listed, list) or not listed:
+            fields.fail("action.legs", "must be one or more [[action.legs]] tables")
+        legs, seen = [], set()
+        for i, leg in enumerate(listed):
+            where = f"action.legs[{i}]"
+            fields.table(leg, set(LEG_KEYS), where)
+            for key in ("swing", "lift"):
+                if key not in leg:
+                    fields.fail(f"{where}.{key}", "missing: the file's joint(s) for it")
+            roles = []
+            for key in LEG_KEYS:
+                v = leg.get(key, [])
+                v = [v] if isinstance(v, str) else v
+                if not isinstance(v, list) or not all(isinstance(x, str) and x for x in v):
+                    fields.fail(f"{where}.{key}", "must be a joint's name or a list of them")
+                if key != "yaw" and not v:
+                    fields.fail(f"{where}.{key}", "must name a joint")
+                if key == "swing" and len(v) != 1:
+                    fields.fail(f"{where}.{key}", f"one joint, got {v}")
+                for name in v:
+                    if name in seen:
+                        fields.fail(f"{where}.{key}", f"joint {name!r} is listed twice")
+                    seen.add(name)
+                roles.append(tuple(v))
+            legs.append((roles[0][0], roles[1], roles[2]))
         g = table.get("gait", {})
         if not isinstance(g, dict):
             fields.fail("action.gait", "must be a table")
@@ -294,24 +438,47 @@ class Gait(Action):
                 fields.fail(f"action.gait.{k}", f"unknown key; valid: {', '.join(gait.PARAMETERS)}")
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
                 fields.fail(f"action.gait.{k}", f"must be a number, got {v!r}")
-        return cls(motors, tuple(sorted((k, float(v)) for k, v in g.items())))
+        return cls(tuple(legs), tuple(sorted((k, float(v)) for k, v in g.items())))
 
     def claimed(self):
-        return {role for role, _ in self.motors} | {k for k, _ in self.parameters}
+        return {"legs"} | {k for k, _ in self.parameters}
 
-    def edit(self, mount, spec, base, names):
-        """Checks the file's 4 hips and 4 ankles the mount names, and maps them."""
-        given = dict(self.motors)
-        for role in GAIT_ROLES:
-            name = given.get(role)
-            if name is None:
-                fail(mount.path, f"action.{role}", "missing: the file's motor for it")
-            file_actuator(mount, spec, f"action.{role}", name)
-        names.update((role, name) for role, name in self.motors if role != name)
+    def check_joints(self, fields, joints):
+        _refuse_planar(fields, joints, "the gait walks a free base on its own legs")
+
+    def check_file(self, mount, spec, drop, names):
+        """The listed joints are hinges or slides of the file, each moved by one of its
+        actuators (on the joint, or on a tendon over it), which are kept."""
+        import mujoco
+        _keep_actuators(mount, drop, "the gait walks the legs through the file's own actuators")
+        moved = set()
+        for act in spec.actuators:
+            if act.trntype == mujoco.mjtTrn.mjTRN_JOINT:
+                moved.add(act.target)
+            elif act.trntype == mujoco.mjtTrn.mjTRN_TENDON:
+                tendon = by_name(spec.tendons, act.target)
+                if tendon is not None:
+                    if "tendons" in drop:
+                        fail(mount.path, "drop", f"actuator {act.name!r} pulls a tendon of "
+                                                 "the file: do not drop its tendons")
+                    moved |= {w.target.name for w in tendon.path
+                              if w.type == mujoco.mjtWrap.mjWRAP_JOINT}
+        for i, (swing, lifts, held) in enumerate(self.legs):
+            for key, group in (("swing", (swing,)), ("lift", lifts), ("yaw", held)):
+                for name in group:
+                    field = f"action.legs[{i}].{key}"
+                    joint = spec.joint(name)
+                    if joint is None:
+                        fail(mount.path, field, f"no joint named {name!r} in {mount.model}")
+                    if joint.type not in (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE):
+                        fail(mount.path, field, f"joint {name!r} is not a hinge or a slide")
+                    if key != "yaw" and name not in moved:
+                        fail(mount.path, field, f"no actuator of {mount.model.name} moves "
+                                                f"joint {name!r}")
 
     def classes(self, mount):
         from tasks import gait
-        return Classes(gait.Gait, gait.physics_class(dict(self.parameters)))
+        return Classes(gait.Gait, gait.physics_class(dict(self.parameters), self.legs))
 
     def check_task_config(self, config):
         from tasks import gait

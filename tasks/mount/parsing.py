@@ -10,9 +10,11 @@ from tasks.mount.kinds import KINDS
 from tasks.mount.records import Action, Beams, Bumper, Mount
 from tasks.mount.spec import BEAMS
 
-#: Joints of the base: its file's, a free joint added, or slide x, slide y (and, for the
-#: two-wheel drive, hinge yaw) added in place of the base's own.
-JOINTS = ("file", "free", "planar")
+#: Joints of the base: its file's, a free joint added, slide x, slide y (and, for the
+#: two-wheel drive, hinge yaw) added in place of the base's own, or slides x, y (and z)
+#: added beside the base's own joints ("slides": held at its height; "slides_z": resting
+#: on the floor by gravity).
+JOINTS = ("file", "free", "planar", "slides", "slides_z")
 #: What of the file a mount may drop: "world" the geoms of its world body (floor, walls,
 #: markers), "lights", "skybox" (its skybox textures), "cameras", "actuators", "tendons",
 #: "sensors" (all but the rangefinders the beams name).
@@ -25,6 +27,7 @@ ACTIONS = {drive: tuple(name for name, kind in KINDS.items() if drive in kind.dr
 
 _TOP = {"name", "description", "file", "drive", "unit", "base", "joints", "drop",
         "drop_geoms", "drop_bodies", "keep_options", "timestep", "integrator", "time_scale",
+        "condim",
         "bumper", "beams", "action", "readings", "check"}
 _BUMPER = {"geom", "shape", "radius", "height", "half_length"}
 _BEAMS = {"height", "sensors"}
@@ -72,6 +75,7 @@ def parse(path: str | pathlib.Path) -> Mount:
                  bumper=bumper, beams=beams, action=action,
                  timestep=number(data, "timestep", "timestep"), integrator=integrator,
                  time_scale=number(data, "time_scale", "time_scale", 1.0),
+                 condim=_parse_condim(fields, data, joints),
                  readings=readings, check=check,
                  description=str(data.get("description", "")))
 
@@ -177,3 +181,20 @@ def _parse_integrator(fields, data):
             fields.fail("integrator", f"unknown integrator {integrator!r}; valid: "
                                       f"{', '.join(models.INTEGRATORS)}")
     return integrator
+
+
+#: A free robot's geoms' contact dimensionality on the floor (MuJoCo's condim values).
+CONDIMS = (1, 3, 4, 6)
+
+
+def _parse_condim(fields, data, joints):
+    """The condim field: the robot's geoms' contact dimensionality (None: the file's)."""
+    if "condim" not in data:
+        return None
+    v = data["condim"]
+    if isinstance(v, bool) or v not in CONDIMS:
+        fields.fail("condim", f"must be one of {', '.join(map(str, CONDIMS))}, got {v!r}")
+    if joints in ("planar", "slides"):
+        fields.fail("condim", f"joints = {joints}: its geoms touch nothing (condim is for "
+                              "a robot that stands on the floor)")
+    return int(v)

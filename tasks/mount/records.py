@@ -100,6 +100,9 @@ class Mount:
     timestep: float | None = None
     integrator: str | None = None
     time_scale: float = 1.0
+    #: The robot's geoms' condim (their contact with the floor and walls), None: the
+    #: file's. The room's floor is condim 1 (frictionless unless a geom asks for more).
+    condim: int | None = None
     #: The [readings] table as sorted (field, value) pairs (Robot.readings).
     readings: tuple[tuple[str, object], ...] = ()
     description: str = ""

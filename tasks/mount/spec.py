@@ -21,7 +21,8 @@ def robot_spec(mount: Mount):
     names = {}
     if mount.base != "base":
         names["base"] = mount.base
-    planar = mount.joints == "planar" or (mount.joints == "file" and not _has_free(base))
+    planar = (mount.joints in ("planar", "slides")
+              or (mount.joints == "file" and not _has_free(base)))
     beam_names = _drop(mount, spec, names)
     _root_joints(mount, spec, base)
     _bumper(mount, spec, base, planar, names)
@@ -107,8 +108,41 @@ def _root_joints(mount, spec, base):
             plain_joint(base, "yaw", mujoco.mjtJoint.mjJNT_HINGE, [0, 0, 1])
     elif mount.joints == "free":
         if list(base.joints):
-            fail(mount.path, "joints", f"body {mount.base!r} has joints of its own: joints = \"file\"")
+            fail(mount.path, "joints", f"body {mount.base!r} has joints of its own: joints = "
+                                       "\"file\", or \"slides\" to add slides beside them")
         base.add_freejoint(name="root")
+    elif mount.joints in ("slides", "slides_z"):
+        _slides_beside(mount, spec, base)
+
+
+#: A joint's fields an MjSpec copy keeps (every field of MjsJoint but its identity).
+JOINT_FIELDS = ("type", "name", "pos", "axis", "ref", "align", "stiffness", "springref",
+                "springdamper", "limited", "range", "margin", "solref_limit", "solimp_limit",
+                "actfrclimited", "actfrcrange", "actgravcomp", "armature", "damping",
+                "frictionloss", "solref_friction", "solimp_friction", "group", "userdata")
+
+
+def _slides_beside(mount, spec, base):
+    """Slides x and y (and z, for "slides_z": a base resting on the floor by gravity)
+    added at the base before its own joints, which are kept with every motor, tendon and
+    equality on them (MuJoCo applies a body's joints in order: the slides first move the
+    base, its own joints then turn it about their axes)."""
+    import mujoco
+    own = list(base.joints)
+    for j in own:
+        if j.type == mujoco.mjtJoint.mjJNT_FREE:
+            fail(mount.path, "joints", f"body {mount.base!r} has a free joint: joints = \"file\"")
+        if j.name in ("x", "y", "z"):
+            fail(mount.path, "joints", f"body {mount.base!r} has a joint named {j.name!r}, "
+                                       "the name of an added slide")
+    kept = [{f: getattr(j, f) for f in JOINT_FIELDS} for j in own]
+    for j in own:
+        spec.delete(j)
+    axes = {"x": [1, 0, 0], "y": [0, 1, 0], "z": [0, 0, 1]}
+    for name in ("x", "y", "z") if mount.joints == "slides_z" else ("x", "y"):
+        plain_joint(base, name, mujoco.mjtJoint.mjJNT_SLIDE, axes[name])
+    for fields in kept:
+        base.add_joint(**fields)
 
 
 # The room's contact bits (models/__init__.py): the bumper 2 / 1 touches walls only;
@@ -125,6 +159,8 @@ def _bumper(mount, spec, base, planar, names):
                 if g is hull:
                     continue
                 g.contype, g.conaffinity = (0, 0) if planar else (0, 5)
+                if mount.condim is not None:
+                    g.condim = mount.condim
     if hull is None:
         hull = _added_bumper(mount, base, planar)
     if not contract:
@@ -206,6 +242,8 @@ def _options(mount, spec):
         spec.option.disableflags = room.option.disableflags
         spec.option.enableflags = room.option.enableflags
     spec.option.gravity = room.option.gravity
+    # the room's camera clipping (a file's own would conflict with it at the attach)
+    spec.visual.map.znear, spec.visual.map.zfar = room.visual.map.znear, room.visual.map.zfar
 
 
 # What a mount adds is set in full here: the file's <default> would otherwise reach it

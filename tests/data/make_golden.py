@@ -85,8 +85,9 @@ def step_digests_name():
 
 
 def step_digest(robot, compiled, **fields):
-    """sha256 of 300 steps (the Ant's gait: 25) of random actions in [-1.2, 1.2] (seed 5)
-    from tasks.load(robot, seed=11, **fields): each step's observation, pose, qpos,
+    """sha256 of 300 steps (a gait's, as the Ant's and the quadruped's: 25) of random
+    actions in [-1.2, 1.2] (seed 5) from tasks.load(robot, seed=11, **fields): each
+    step's observation, pose, qpos,
     qvel, step type, reward and substeps; a new episode after the last step of one."""
     import tasks
     env = tasks.load(robot, seed=11, **fields)
@@ -95,7 +96,8 @@ def step_digest(robot, compiled, **fields):
     rng = np.random.default_rng(5)
     env.reset()
     dim = env.action_spec().shape[0]
-    for _ in range(25 if robot == "ant" else 300):
+    from tasks import gait
+    for _ in range(25 if isinstance(env.task, gait.Gait) else 300):
         ts = env.step(rng.uniform(-1.2, 1.2, dim))
         for k in sorted(ts.observation):
             h.update(ts.observation[k].tobytes())
