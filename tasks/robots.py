@@ -42,27 +42,36 @@ class Drive:
     readings: tuple = ()
 
 
+#: Protocol 6's learner: one set for both drives, as Table 1 gives one learner (all but
+#: the memory size). The policy threshold is fitted: 0.3 of 0, 0.05, 0.2, 0.3 and 0.4 on
+#: seeds 300-349 (two-wheel) and 300-329 (floating), by the figures within 1.5x and the
+#: claims held over both robots (docs/interpretation.md, "The adopted readings (protocol
+#: 6)"); every other learner reading is the default.
+LEARNER = (("policy_threshold", 0.3),)
+
 DRIVES = {
-    # Protocol 5 (docs/interpretation.md, "The adopted readings"): stage 1's fallback
-    # readings (`ebrl fit --stage first-trial`, docs/fit_first_trial_two_wheel.md, trial
-    # 6 less its blocked_move=refuse); the learner's Table 1 defaults.
+    # Protocol 6 (docs/interpretation.md, "The adopted readings (protocol 6)"): the learner
+    # (LEARNER); the 20% random action Section 3.4's Gaussian, the random walk's demand
+    # uniform (the one open random demand); stage 1's fallback and body readings
+    # (`ebrl fit --stage first-trial`, docs/fit_first_trial_two_wheel.md, trial 6 less its
+    # blocked_move=refuse).
     "two_wheel": Drive("two_wheel", table1="T", budget=30_000, avoidance="eq8",
                        modalities=(("range", 1.0),),
-                       readings=(("random_demand", "uniform_walk"),
-                                 ("random_in_avoidance", "add"),
-                                 ("leftover_turn", "away"))),
-    # Stage 1's fallback and action readings (docs/fit_first_trial_floating.md, trial 9);
-    # stage 2's policy threshold (0.4, between trial 126's 0.474 and 0.3: interpretation.md);
-    # the initial reliability, eq 9's dead zone and the velocity sensor's readings from
-    # `ebrl fit`'s trial 126 (protocol 4, study fit150, RESULTS.md "Search"), as searched.
+                       readings=LEARNER + (("random_demand", "uniform_walk"),
+                                           ("random_in_avoidance", "add"),
+                                           ("leftover_turn", "away"))),
+    # The learner (LEARNER); the random demands as the two-wheel drive's; stage 1's
+    # fallback and action readings (docs/fit_first_trial_floating.md, trial 9); eq 9's
+    # dead zone and the velocity sensor's readings from `ebrl fit`'s trial 126 (protocol 4,
+    # study fit150, RESULTS.md "Search"), as searched.
     "floating": Drive("floating", table1="F", budget=100_000, avoidance="eq9-10",
                       modalities=(("range", 0.7), ("velocity", 0.3)),
-                      readings=(("eq9_dead_zone", "keep"),
-                                ("random_demand", "uniform_walk"),
-                                ("random_in_avoidance", "replace"),
-                                ("action_noise", 0.17273080599893353),
-                                ("velocity_noise", 0.06931187891441754),
-                                ("velocity_code", "code"))),
+                      readings=LEARNER + (("eq9_dead_zone", "keep"),
+                                          ("random_demand", "uniform_walk"),
+                                          ("random_in_avoidance", "replace"),
+                                          ("action_noise", 0.17273080599893353),
+                                          ("velocity_noise", 0.06931187891441754),
+                                          ("velocity_code", "code"))),
 }
 
 
