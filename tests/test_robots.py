@@ -235,14 +235,17 @@ def test_hovercraft_glides_and_a_bump_takes_most_of_its_speed_into_the_wall():
 
 
 def test_a_drives_readings_reach_its_robots_runs_and_set_overrides_them():
-    """Protocol 5's readings (tasks.robots: a drive's, a robot's own on top) are each
-    run's config; --set (a spec's overrides) changes any of them."""
+    """Protocol 6's readings (tasks.robots: a drive's, a robot's own on top) are each
+    run's config; --set (a spec's overrides) changes any of them. Both drives share one
+    learner (tasks.robots.LEARNER)."""
     floating = dict(tasks.ROBOTS["floating"].readings)
     spec = protocol.RunSpec("floating", "avoidance", 0, 10)
     agent, task = spec.agent_config(), spec.task_config()
-    assert agent.policy_threshold == floating["policy_threshold"] > 0
+    assert agent.policy_threshold == floating["policy_threshold"] == \
+        dict(tasks.robots.LEARNER)["policy_threshold"] > 0
+    assert agent.initial_reliability == 1.0
     assert (agent.eq9_dead_zone, agent.random_in_avoidance, agent.random_demand) == \
-        ("keep", "replace", "uniform_all")
+        ("keep", "replace", "uniform_walk")
     assert (task.bump, task.radius, task.velocity_code) == ("stop", floating["radius"], "code")
     assert agent.memory_size == 4096 and task.sensor_noise == 0.05 * 255   # Table 1, 3.2
     # The hovercraft shares the drive's readings, not the planar puck's body.
@@ -250,12 +253,13 @@ def test_a_drives_readings_reach_its_robots_runs_and_set_overrides_them():
     assert hover.agent_config() == agent
     assert hover.task_config().action_noise == task.action_noise == floating["action_noise"]
     assert (hover.task_config().bump, hover.task_config().radius) == ("grip", None)
-    # The two-wheel drive: its fallback's and move's readings, Table 1's learner, the
+    # The two-wheel drive: its fallback's and move's readings, the same learner, the
     # paper's 5% action noise; diff_drive keeps its own body (no radius reading).
     two = protocol.RunSpec("diff_drive", "random", 0, 10)
-    assert (two.agent_config().initial_reliability, two.agent_config().policy_threshold) == (1.0, 0.0)
+    assert (two.agent_config().initial_reliability, two.agent_config().policy_threshold) == \
+        (1.0, agent.policy_threshold)
     assert (two.agent_config().random_demand, two.agent_config().random_in_avoidance) == \
-        ("uniform_all", "add")
+        ("uniform_walk", "add")
     assert (two.task_config().leftover_turn, two.task_config().radius) == ("away", None)
     assert two.task_config().action_noise == 0.05
     planar = protocol.RunSpec("two_wheel", "random", 0, 10).task_config()
