@@ -1,5 +1,6 @@
 """ebrl.compiled: numba's on-disk cache follows every file a cached kernel compiles in,
 in real processes on real files (a kernel in one module calling a kernel in another)."""
+import os
 import re
 import subprocess
 import sys
@@ -23,9 +24,9 @@ MAIN = textwrap.dedent("""\
     """)
 
 
-def _run(folder):
+def _run(folder, env=None):
     out = subprocess.run([sys.executable, "main.py"], cwd=folder, capture_output=True,
-                         text=True, check=True).stdout.split()
+                         text=True, check=True, env=env).stdout.split()
     return float(out[0]), int(out[1])
 
 
@@ -119,3 +120,96 @@ def test_each_module_imported_first_has_its_cached_kernels_keyed_on_their_depend
         out = subprocess.run([sys.executable, "-c", code, name], cwd=ROOT, capture_output=True,
                              text=True, check=True).stdout.split()
         assert int(out[0]) > 0 and out[0] == out[1], (name, out)
+
+
+# -- a damaged cache entry mends itself ----------------------------------------------
+def _damage(path, kind):
+    """A cache file as an interrupted copy or a full disk leaves it: cut to half its
+    length ("truncated"), or gone while its index still names it ("missing")."""
+    if kind == "missing":
+        path.unlink()
+    else:
+        path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+
+
+def test_a_folder_that_cannot_be_written_caches_elsewhere_still_keyed(tmp_path):
+    """`__pycache__` unwritable (here a file in its place: unwritable for root too): the
+    kernels cache in the user's cache folder, keyed on their dependencies there as well;
+    no folder writable at all: they compile in every process, one warning line."""
+    _project(tmp_path, install=True)
+    (tmp_path / "callee.py").write_text(CALLEE.format(scale=3.0))
+    (tmp_path / "__pycache__").write_text("")
+    user = dict(os.environ, XDG_CACHE_HOME=str(tmp_path / "user"))
+    assert _run(tmp_path, user) == (7.0, 0)
+    assert _run(tmp_path, user) == (7.0, 1)
+    assert list((tmp_path / "user" / "numba").glob("*/caller.g-*.nbc"))
+    (tmp_path / "callee.py").write_text(CALLEE.format(scale=10.0))
+    assert _run(tmp_path, user) == (21.0, 0)
+    nowhere = dict(os.environ, XDG_CACHE_HOME=str(tmp_path / "__pycache__"))
+    proc = subprocess.run([sys.executable, "main.py"], cwd=tmp_path, capture_output=True,
+                          text=True, check=True, env=nowhere)
+    assert proc.stdout.split()[:2] == ["21.0", "0"]
+    assert proc.stderr.count("ebrl: warning: no numba cache folder can be written") == 1
+    assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+
+
+#: One run of the paper's two-wheel robot in a fresh process (the agent's, the task's
+#: and the loop's cached kernels): its result's digest, whether the loop came from the
+#: cache, and its stderr. With `copy`, first the checkout's own cache of the kernels'
+#: modules is copied into NUMBA_CACHE_DIR's folders for them (numba's layout), nothing run.
+PROBE = textwrap.dedent("""\
+    import hashlib, pathlib, shutil, sys
+    from ebrl import kernels
+    from experiments.running import fused, protocol, runner
+    from tasks.kernels import body
+    if sys.argv[1] == "copy":
+        for kernel in (kernels.learn_step, body.base_pose, fused.run):
+            source = pathlib.Path(kernel.py_func.__code__.co_filename).parent / "__pycache__"
+            for path in source.glob("*.nb[ic]"):
+                shutil.copy2(path, pathlib.Path(kernel.stats.cache_path) / path.name)
+        sys.exit()
+    spec = runner.plan(["two_wheel"], ["avoidance"], [0], 600)[0]
+    result = protocol.execute(spec)
+    digest = hashlib.sha256()
+    for key in ("trial_ends", "trace", "starts"):
+        digest.update(result[key].tobytes())
+    print(digest.hexdigest(), sum(fused.run.stats.cache_hits.values()))
+    """)
+
+
+def _probe(env, *args):
+    from helpers import ROOT
+    proc = subprocess.run([sys.executable, "-c", PROBE, *args], cwd=ROOT, capture_output=True,
+                          text=True, check=True, env=env)
+    return (proc.stdout.split() or [None, None]), proc.stderr
+
+
+def test_the_agents_the_tasks_and_the_loops_damaged_entries_mend_with_the_same_bits(tmp_path):
+    """In real processes on a copy of the checkout's cache (NUMBA_CACHE_DIR): the agent's
+    learn_step (ebrl/kernels.py) with a truncated data file, the task's base_pose
+    (tasks/kernels/body.py) with a truncated index, the loop (experiments/running/fused.py)
+    with a missing data file. The loop compiles again, reading the other two as it does:
+    a warning line for each, the run's bits unchanged, and the next process loads all
+    from the rebuilt cache, silently."""
+    plain = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    (expected, _), _ = _probe(plain, "run")  # the checkout's own cache (compiled if cold)
+    copy = dict(plain, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    _probe(copy, "copy")
+    found = {name: sorted((tmp_path / "cache").glob(f"*/{name}-*.{ext}"))
+             for name, ext in (("kernels.learn_step", "1.nbc"), ("body.base_pose", "nbi"),
+                               ("fused.run", "1.nbc"))}
+    assert all(len(paths) == 1 for paths in found.values()), found
+    damage = {"kernels.learn_step": "truncated", "body.base_pose": "truncated",
+              "fused.run": "missing"}
+    for name, kind in damage.items():
+        _damage(found[name][0], kind)
+    (digest, hits), err = _probe(copy, "run")
+    assert digest == expected and hits == "0"
+    lines = err.strip().splitlines()
+    assert sorted(lines) == sorted(
+        f"ebrl: warning: numba cache file {found[name][0]} could not be read "
+        + ("(UnpicklingError: pickle data was truncated)" if kind == "truncated" else
+           f"(missing, named by {found[name][0].name.rsplit('.', 2)[0]}.nbi)")
+        + "; discarded, compiling the kernel again" for name, kind in damage.items()), err
+    (digest, hits), err = _probe(copy, "run")
+    assert digest == expected and hits == "1" and err == ""
