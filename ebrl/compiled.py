@@ -184,9 +184,14 @@ class InTreeLocator(_Dependent, caching.InTreeCacheLocator):
     """The __pycache__ locator, with the dependencies in its stamp."""
 
 
-def mended(path, error, removed):
+#: What a damaged cache file is renamed to (path + DISCARDED) until the entry is saved
+#: again: the process that renames it is the one that says so.
+DISCARDED = ".discarded"
+
+
+def mended(path, error, left=None):
     """The one line a damaged cache entry gives (stderr)."""
-    what = "discarded" if removed is None else f"left in place ({removed})"
+    what = "discarded" if left is None else f"left in place ({left})"
     print(f"ebrl: warning: numba cache file {path} could not be read ({error}); {what}, "
           "compiling the kernel again", file=sys.stderr, flush=True)
 
@@ -195,9 +200,14 @@ class MendingCacheFile(caching.IndexDataCacheFile):
     """numba's index and data files of one kernel's cache entry, where an entry that
     cannot be read (a truncated or garbled index, a truncated data file, an index naming
     a missing data file) is discarded with one warning line (mended()) and reads as
-    absent: numba then compiles the kernel and saves the entry again. Where the file
-    cannot be removed (a folder that cannot be written) it is left, the warning says so,
-    and the kernel is compiled in each process that reads it."""
+    absent: numba then compiles the kernel and saves the entry again.
+
+    One line however many processes read the damaged file at once (the runner's
+    workers): the damaged file is renamed to file + DISCARDED, and only the process
+    whose rename succeeds says so; a data file missing while its DISCARDED copy is there
+    is one that another process is compiling again, silently. save() removes the
+    DISCARDED copies. Where the file cannot be renamed (a folder that cannot be written)
+    it is left, the warning says so, and each process that reads it compiles the kernel."""
 
     def _load_index(self):
         try:
@@ -213,6 +223,12 @@ class MendingCacheFile(caching.IndexDataCacheFile):
             print(f"ebrl: warning: numba cache entry in {self._cache_path} could not be "
                   f"saved ({type(error).__name__}: {error.strerror or error}); the kernel "
                   "runs compiled but uncached", file=sys.stderr, flush=True)
+            return
+        for path in (self._index_path, self._data_path(self._load_index().get(key, ""))):
+            try:
+                os.unlink(path + DISCARDED)
+            except OSError:  # none (the common case)
+                pass
 
     def load(self, key):
         name = self._load_index().get(key)
@@ -221,24 +237,25 @@ class MendingCacheFile(caching.IndexDataCacheFile):
         path = self._data_path(name)
         try:
             return self._load_data(name)
-        except Exception as error:  # numba returns None on OSError alone, silently
-            if isinstance(error, FileNotFoundError):
-                error = f"missing, named by {os.path.basename(self._index_path)}"
+        except FileNotFoundError:  # numba returns None here, silently
+            if not os.path.exists(path + DISCARDED):
+                mended(path, f"missing, named by {os.path.basename(self._index_path)}")
+            return None
+        except Exception as error:
             self._discard(path, error)
             return None
 
     @staticmethod
     def _discard(path, error):
-        if not isinstance(error, str):
-            error = f"{type(error).__name__}: {str(error).strip() or 'no message'}"
-        removed = None
+        error = f"{type(error).__name__}: {str(error).strip() or 'no message'}"
         try:
-            os.unlink(path)
-        except FileNotFoundError:
-            pass
+            os.replace(path, path + DISCARDED)
+        except FileNotFoundError:  # another process discarded it first, and said so
+            return
         except OSError as e:
-            removed = f"{type(e).__name__}: {e.strerror or e}"
-        mended(path, error, removed)
+            mended(path, error, f"{type(e).__name__}: {e.strerror or e}")
+            return
+        mended(path, error)
 
 
 def install():
