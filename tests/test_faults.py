@@ -167,7 +167,7 @@ def test_a_folder_turned_read_only_mid_run_then_writable(clean, tmp_path, small_
 
 
 # -- Ray ---------------------------------------------------------------------------------
-def start_cluster(tries=3):
+def start_cluster(tries=3, cpus=2):
     """A local Ray cluster of one head node (2 CPUs), its processes this test's own. Ray
     waits at most 30 s for its raylet, too little on a heavily loaded machine: tried
     again then."""
@@ -175,7 +175,7 @@ def start_cluster(tries=3):
     for attempt in range(tries):
         cluster = ray_cluster.Cluster()
         try:
-            cluster.add_node(num_cpus=2, include_dashboard=False)
+            cluster.add_node(num_cpus=cpus, include_dashboard=False)
             return cluster
         except Exception:
             cluster.shutdown()
@@ -263,6 +263,48 @@ def test_a_lost_ray_cluster_is_one_line_and_keeps_the_finished_runs(clean, tmp_p
     again = records(out)
     assert len(again) == 8 and all(r["status"] == "complete" for r in again.values())
     assert all(again[k] == v for k, v in done.items())  # the finished runs kept as they were
+
+
+def _held(hold, node):
+    """The runs that wait on the file hold on the Ray node (EBRL_TEST_HOLD's markers)."""
+    return sorted(p.name.rsplit(".", 1)[1] for p in hold.parent.glob(f"{hold.name}.{node.node_id}.*"))
+
+
+def _until(condition, proc, what, seconds=300):
+    """Waits until condition() (a loaded machine may take minutes to start a Ray node)."""
+    deadline = time.time() + seconds
+    while not condition():
+        assert proc.poll() is None and time.time() < deadline, (what, proc.communicate())
+        time.sleep(0.05)
+
+
+def test_ray_across_nodes_a_lost_node_costs_its_runs_in_flight_and_a_new_node_takes_work(
+        clean, tmp_path):
+    """A head (no CPUs: the driver's) and two worker nodes of one CPU each, on this machine.
+    With a run in flight on each worker node, one node is killed (all its processes,
+    SIGKILL); a node added then takes runs, and the command finishes every run, bit for
+    bit the local pool's."""
+    out, hold = tmp_path / "results", tmp_path / "hold"
+    hold.touch()  # every run waits, announced, until the file goes
+    cluster = start_cluster(cpus=0)
+    try:
+        lost, kept = (cluster.add_node(num_cpus=1) for _ in range(2))
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "experiments", "run", *SET, "--backend", "ray", "--out",
+             str(out)], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+            env=dict(env(EBRL_TEST_HOLD=str(hold)), RAY_ADDRESS=cluster.address))
+        _until(lambda: _held(hold, lost) and _held(hold, kept), proc, "a run on each node")
+        cluster.remove_node(lost, allow_graceful=False)
+        added = cluster.add_node(num_cpus=1)
+        _until(lambda: _held(hold, added), proc, "a run on the added node")
+        hold.unlink()
+        stdout, stderr = proc.communicate(timeout=300)
+    finally:
+        cluster.shutdown()
+    assert proc.returncode == 0, stderr
+    # Ray's driver prints the lost node's raylet's end ("(raylet) Raylet is terminated...")
+    assert stdout.strip().splitlines()[-1].startswith("8 runs made, 0 already on disk"), stdout
+    assert summary(out) == summary(clean) and arrays(out) == arrays(clean)
 
 
 # -- studies (`ebrl fit`) --------------------------------------------------------------
