@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 import helpers
+from experiments.running import results, runner
 from helpers import ROOT
 
 SET = ["--robot", "two_wheel", "--condition", "all", "--seeds", "0-3", "--steps", "1000",
@@ -76,6 +77,9 @@ def test_a_crashed_worker_is_recorded_with_its_signal_whatever_the_workers(clean
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
     assert all(name in lines[0] for name in crash) and "6 runs made" in lines[0]
+    assert lines[0].endswith("; " + results.advice([f"WorkerDied: {s}" for s in crash.values()]))
+    assert "a crash in native code, which a rerun repeats" in lines[0]
+    assert "rerun the same command to retry the runs whose worker was killed" in lines[0]
     got = records(out)
     for name, sig in crash.items():
         assert got[name]["status"] == "failed" and got[name]["signal"] == sig
@@ -213,6 +217,9 @@ def test_ray_records_a_raised_run_and_a_dead_worker_as_the_local_pool_does(clean
     assert proc.returncode == 1, proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and raised in lines[0] and died in lines[0], proc.stderr
+    assert lines[0].endswith("; a rerun raises the same again (same seed, same result): each "
+                             "run.json holds its traceback")  # the killed one's advice before
+    assert "rerun the same command to retry the runs whose worker was killed" in lines[0]
     got = records(out)
     assert got[raised]["status"] == "failed" and got[raised]["error"] == (
         f"PhysicsError: failure injected by EBRL_TEST_FAIL (test only) in {raised}")
@@ -305,6 +312,76 @@ def test_ray_across_nodes_a_lost_node_costs_its_runs_in_flight_and_a_new_node_ta
     # Ray's driver prints the lost node's raylet's end ("(raylet) Raylet is terminated...")
     assert stdout.strip().splitlines()[-1].startswith("8 runs made, 0 already on disk"), stdout
     assert summary(out) == summary(clean) and arrays(out) == arrays(clean)
+
+
+# -- what a failure line advises ------------------------------------------------------
+def _missing_library():
+    import ctypes
+    ctypes.CDLL("libebrl_no_such_library.so.1")
+
+
+def _damaged_install():
+    import importlib
+    importlib.import_module("ebrl_no_such_module")
+
+
+def _bad_robot_file():
+    import mujoco
+    mujoco.MjModel.from_xml_string("<mujoco><worldbody><body><geom type='sphere'/>"
+                                   "</body></worldbody><no_such_element/></mujoco>")
+
+
+def _out_of_memory():
+    np.empty(2 ** 62, dtype=np.uint8)
+
+
+def _unstable_simulation():
+    from dm_control.rl.control import PhysicsError
+    raise PhysicsError("Physics state is invalid. Warning(s) raised: mjWARN_BADQACC")
+
+
+#: Real errors of each kind a rerun cannot mend alone, raised here as a worker raises
+#: them (the runner records whatever the run raised): what the line says instead.
+CANNOT_RERUN = {
+    "library": (_missing_library, "a system library is missing (the error names it): "
+                                  "install it, then rerun"),
+    "install": (_damaged_install, "the install is damaged or incomplete: reinstall it "
+                                  "(pip install -e .), then rerun"),
+    "robot": (_bad_robot_file, "the robot file is bad (the error says where): fix it, then rerun"),
+    "memory": (_out_of_memory, "out of memory: rerun the same command with fewer --workers"),
+    "raised": (_unstable_simulation, "a rerun raises the same again (same seed, same result)"),
+}
+
+
+@pytest.mark.parametrize("kind", sorted(CANNOT_RERUN))
+def test_a_failure_that_a_rerun_cannot_mend_says_what_will(kind, tmp_path):
+    cause, said = CANNOT_RERUN[kind]
+    spec = runner.plan(["two_wheel"], ["avoidance"], [0], 200)[0]
+    with pytest.raises(BaseException) as raised:
+        cause()
+    line = results.write_failure(tmp_path, spec, raised.value)  # the record, as the runner's
+    assert results.failed_runs(tmp_path) == {"two_wheel/avoidance/seed_000": line}
+    assert results.failure_kind(line) == kind, line
+    assert results.advice([line]).startswith(said)
+    assert "to retry" not in results.advice([line])
+
+
+def test_the_rerun_advice_by_kind_through_the_commands(tmp_path):
+    """`ebrl report` on runs that failed each way: one line with each kind's advice once;
+    killed and crashed workers come from the crash test above, a raised run from
+    test_experiments, through `ebrl run`."""
+    for seed, kind in enumerate(sorted(CANNOT_RERUN)):
+        with pytest.raises(BaseException) as raised:
+            CANNOT_RERUN[kind][0]()
+        results.write_failure(tmp_path, runner.plan(["two_wheel"], ["avoidance"], [seed], 200)[0],
+                              raised.value)
+    proc = ebrl("report", tmp_path, check=False)
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and len(lines) == 1, proc.stderr
+    assert lines[0].startswith(f"ebrl: error: no complete runs under {tmp_path} (5 failed: ")
+    for kind, (_, said) in CANNOT_RERUN.items():
+        assert lines[0].count(said.replace("rerun the same command", "rerun `ebrl run`")
+                              .replace("then rerun", "then rerun `ebrl run`")) == 1, (kind, lines)
 
 
 # -- studies (`ebrl fit`) --------------------------------------------------------------
