@@ -287,23 +287,25 @@ def _until(condition, proc, what, seconds=300):
 
 def test_ray_across_nodes_a_lost_node_costs_its_runs_in_flight_and_a_new_node_takes_work(
         clean, tmp_path):
-    """A head (no CPUs: the driver's) and two worker nodes of one CPU each, on this machine.
-    With a run in flight on each worker node, one node is killed (all its processes,
-    SIGKILL); a node added then takes runs, and the command finishes every run, bit for
-    bit the local pool's."""
+    """A head and two worker nodes, of one CPU each, on this machine: one worker node is
+    there from the start, the other added once a run is in flight on each of the first
+    two, and takes a run; then the first worker node is killed (all its processes,
+    SIGKILL) with its run in flight. The command makes every run, bit for bit the local
+    pool's."""
     out, hold = tmp_path / "results", tmp_path / "hold"
     hold.touch()  # every run waits, announced, until the file goes
-    cluster = start_cluster(cpus=0)
+    cluster = start_cluster(cpus=1)
     try:
-        lost, kept = (cluster.add_node(num_cpus=1) for _ in range(2))
+        lost = cluster.add_node(num_cpus=1)
         proc = subprocess.Popen(
             [sys.executable, "-m", "experiments", "run", *SET, "--backend", "ray", "--out",
              str(out)], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
             env=dict(env(EBRL_TEST_HOLD=str(hold)), RAY_ADDRESS=cluster.address))
-        _until(lambda: _held(hold, lost) and _held(hold, kept), proc, "a run on each node")
-        cluster.remove_node(lost, allow_graceful=False)
+        _until(lambda: _held(hold, cluster.head_node) and _held(hold, lost), proc,
+               "a run in flight on each node")
         added = cluster.add_node(num_cpus=1)
         _until(lambda: _held(hold, added), proc, "a run on the added node")
+        cluster.remove_node(lost, allow_graceful=False)
         hold.unlink()
         stdout, stderr = proc.communicate(timeout=300)
     finally:
