@@ -1,6 +1,7 @@
 """ebrl.compiled: numba's on-disk cache follows every file a cached kernel compiles in,
 in real processes on real files (a kernel in one module calling a kernel in another)."""
 import os
+import pathlib
 import re
 import subprocess
 import sys
@@ -123,15 +124,6 @@ def test_each_module_imported_first_has_its_cached_kernels_keyed_on_their_depend
 
 
 # -- a damaged cache entry mends itself ----------------------------------------------
-def _damage(path, kind):
-    """A cache file as an interrupted copy or a full disk leaves it: cut to half its
-    length ("truncated"), or gone while its index still names it ("missing")."""
-    if kind == "missing":
-        path.unlink()
-    else:
-        path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
-
-
 def test_a_folder_that_cannot_be_written_caches_elsewhere_still_keyed(tmp_path):
     """`__pycache__` unwritable (here a file in its place: unwritable for root too): the
     kernels cache in the user's cache folder, keyed on their dependencies there as well;
@@ -154,20 +146,32 @@ def test_a_folder_that_cannot_be_written_caches_elsewhere_still_keyed(tmp_path):
 
 
 #: One run of the paper's two-wheel robot in a fresh process (the agent's, the task's
-#: and the loop's cached kernels): its result's digest, whether the loop came from the
-#: cache, and its stderr. With `copy`, first the checkout's own cache of the kernels'
-#: modules is copied into NUMBA_CACHE_DIR's folders for them (numba's layout), nothing run.
+#: and the loop's cached kernels): its result's digest and whether the loop came from the
+#: cache. Given "NAME:FILE:KIND" arguments, first the checkout's own cache of the kernels'
+#: modules is copied into NUMBA_CACHE_DIR's folders for them (numba's layout) and kernel
+#: NAME's FILE ("data" or "index") damaged as an interrupted copy or a full disk leaves
+#: it: cut to half its length ("truncated") or gone while its index names it ("missing").
 PROBE = textwrap.dedent("""\
     import hashlib, pathlib, shutil, sys
     from ebrl import kernels
     from experiments.running import fused, protocol, runner
     from tasks.kernels import body
-    if sys.argv[1] == "copy":
-        for kernel in (kernels.learn_step, body.base_pose, fused.run):
-            source = pathlib.Path(kernel.py_func.__code__.co_filename).parent / "__pycache__"
-            for path in source.glob("*.nb[ic]"):
-                shutil.copy2(path, pathlib.Path(kernel.stats.cache_path) / path.name)
-        sys.exit()
+    folders = {}
+    for kernel in (kernels.learn_step, body.base_pose, fused.run):
+        folder = folders[kernel.py_func.__module__.rpartition(".")[2]] = pathlib.Path(
+            kernel.stats.cache_path)
+        source = pathlib.Path(kernel.py_func.__code__.co_filename).parent / "__pycache__"
+        for path in source.glob("*.nb[ic]") if sys.argv[1:] else ():
+            shutil.copy2(path, folder / path.name)
+    for what in sys.argv[1:]:
+        name, part, kind = what.split(":")
+        path, = folders[name.split(".")[0]].glob(
+            f"{name}-*.py*{'.1.nbc' if part == 'data' else '.nbi'}")
+        if kind == "missing":
+            path.unlink()
+        else:
+            path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+        print(path)
     spec = runner.plan(["two_wheel"], ["avoidance"], [0], 600)[0]
     result = protocol.execute(spec)
     digest = hashlib.sha256()
@@ -177,39 +181,37 @@ PROBE = textwrap.dedent("""\
     """)
 
 
-def _probe(env, *args):
+def _probe(env, *damage):
+    """(the damaged files, the digest, the loop's cache hits), and stderr."""
     from helpers import ROOT
-    proc = subprocess.run([sys.executable, "-c", PROBE, *args], cwd=ROOT, capture_output=True,
+    proc = subprocess.run([sys.executable, "-c", PROBE, *damage], cwd=ROOT, capture_output=True,
                           text=True, check=True, env=env)
-    return (proc.stdout.split() or [None, None]), proc.stderr
+    *damaged, digest, hits = proc.stdout.split()
+    return (damaged, digest, int(hits)), proc.stderr
 
 
 def test_the_agents_the_tasks_and_the_loops_damaged_entries_mend_with_the_same_bits(tmp_path):
-    """In real processes on a copy of the checkout's cache (NUMBA_CACHE_DIR): the agent's
-    learn_step (ebrl/kernels.py) with a truncated data file, the task's base_pose
-    (tasks/kernels/body.py) with a truncated index, the loop (experiments/running/fused.py)
-    with a missing data file. The loop compiles again, reading the other two as it does:
-    a warning line for each, the run's bits unchanged, and the next process loads all
-    from the rebuilt cache, silently."""
+    """In real processes on a copy of the checkout's cache (NUMBA_CACHE_DIR): the loop
+    (experiments/running/fused.py) with its data file cut to half (issue 40's case: every
+    run failed, UnpicklingError), the agent's learn_step (ebrl/kernels.py) with its data
+    file missing, the task's base_pose (tasks/kernels/body.py) with its index cut to half.
+    The loop compiles again, reading the other two as it does: a warning line for each,
+    the run's bits unchanged, and the next process loads all from the rebuilt cache,
+    silently."""
     plain = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
-    (expected, _), _ = _probe(plain, "run")  # the checkout's own cache (compiled if cold)
+    (_, expected, _), _ = _probe(plain)  # the checkout's own cache (compiled if cold)
     copy = dict(plain, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
-    _probe(copy, "copy")
-    found = {name: sorted((tmp_path / "cache").glob(f"*/{name}-*.{ext}"))
-             for name, ext in (("kernels.learn_step", "1.nbc"), ("body.base_pose", "nbi"),
-                               ("fused.run", "1.nbc"))}
-    assert all(len(paths) == 1 for paths in found.values()), found
-    damage = {"kernels.learn_step": "truncated", "body.base_pose": "truncated",
-              "fused.run": "missing"}
-    for name, kind in damage.items():
-        _damage(found[name][0], kind)
-    (digest, hits), err = _probe(copy, "run")
-    assert digest == expected and hits == "0"
-    lines = err.strip().splitlines()
-    assert sorted(lines) == sorted(
-        f"ebrl: warning: numba cache file {found[name][0]} could not be read "
-        + ("(UnpicklingError: pickle data was truncated)" if kind == "truncated" else
-           f"(missing, named by {found[name][0].name.rsplit('.', 2)[0]}.nbi)")
-        + "; discarded, compiling the kernel again" for name, kind in damage.items()), err
-    (digest, hits), err = _probe(copy, "run")
-    assert digest == expected and hits == "1" and err == ""
+    (damaged, digest, hits), err = _probe(copy, "fused.run:data:truncated",
+                                          "kernels.learn_step:data:missing",
+                                          "body.base_pose:index:truncated")
+    assert digest == expected and hits == 0
+    run, learn_step, base_pose = damaged
+    truncated = "(UnpicklingError: pickle data was truncated)"
+    said = [f"{run} could not be read {truncated}", f"{base_pose} could not be read {truncated}",
+            f"{learn_step} could not be read (missing, named by "
+            f"{pathlib.Path(learn_step).name.rsplit('.', 2)[0]}.nbi)"]
+    assert sorted(err.strip().splitlines()) == sorted(
+        f"ebrl: warning: numba cache file {line}; discarded, compiling the kernel again"
+        for line in said), err
+    (_, digest, hits), err = _probe(copy)
+    assert digest == expected and hits == 1 and err == ""
