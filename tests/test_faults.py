@@ -364,6 +364,7 @@ def test_a_failure_that_a_rerun_cannot_mend_says_what_will(kind, tmp_path):
     line = results.write_failure(tmp_path, spec, raised.value)  # the record, as the runner's
     assert results.failed_runs(tmp_path) == {"two_wheel/avoidance/seed_000": line}
     assert results.failure_kind(line) == kind, line
+    assert results.failure_kind(f"{spec.name}: {line}") == kind  # as a study's trial holds it
     assert results.advice([line]).startswith(said)
     assert "to retry" not in results.advice([line])
 
@@ -467,6 +468,8 @@ def test_a_trial_whose_runs_failed_is_marked_failed_not_scored(tmp_path):
     assert proc.returncode == 1, proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "trial 0" in lines[0] and "PhysicsError" in lines[0], proc.stderr
+    assert lines[0].endswith("; a rerun raises the same again (same seed, same result): each "
+                             "run.json holds its traceback")
     got = trials(out)
     assert [t.state for t in got] == [optuna.trial.TrialState.FAIL] * 2
     for t in got:

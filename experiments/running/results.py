@@ -18,6 +18,7 @@ import json
 import os
 import pathlib
 import platform
+import re
 import socket
 import subprocess
 import tempfile
@@ -253,7 +254,10 @@ FAILURE_KINDS = (
 
 
 def failure_kind(error):
-    """The kind (FAILURE_KINDS) of a failed run's one-line error."""
+    """The kind (FAILURE_KINDS) of a failed run's one-line error, alone or after its run
+    folder's name ("two_wheel/random/seed_000: WorkerDied: ...", as a study's trial
+    holds it)."""
+    error = re.sub(r"^[\w.-]+/[\w.-]+/seed_\d+: ", "", error)
     return next(kind for kind, test, _ in FAILURE_KINDS if test(error))
 
 
