@@ -13,8 +13,11 @@ own stamp the content of every file its module reaches through its globals (modu
 compiled functions, other functions and classes), transitively, among the modules that
 live outside the Python installation (this checkout's, installed in place). An edit of any
 of them recompiles the kernels that may depend on it, once, on the next run; the cache
-stays where numba puts it (`__pycache__` beside the file, or NUMBA_CACHE_DIR). It changes
-no compiled code.
+stays where numba puts it (`__pycache__` beside the file, NUMBA_CACHE_DIR, or the user's
+cache folder where the file's own cannot be written; where none can, a temporary one per
+process: TemporaryLocator). A cache entry that cannot be read
+(truncated, an index naming a missing file) is discarded with one warning line naming
+the file and the kernel compiled again (MendingCacheFile). It changes no compiled code.
 
 The rule: every module that defines a cached kernel imports this module in its own
 import block, ``from ebrl import compiled  # noqa: F401  numba's cache keyed on ...``,
@@ -41,6 +44,17 @@ fallback follows numba's rename in 0.62, read in numba's source, not run here):
   protocol, ``from_function(py_func, py_file)`` and ``get_source_stamp()``.
 - in covers() only: ``Dispatcher._cache`` and its ``_impl``, numba's cache of a kernel
   and the CacheImpl that holds the locator it chose.
+- ``numba.core.caching.UserWideCacheLocator`` (numba's user-wide cache folder, where a
+  kernel caches when its own folder cannot be written: a read-only checkout), subclassed
+  the same way, so a cache there is keyed on the dependencies too.
+- ``numba.core.caching.IndexDataCacheFile`` (the index and data files of a kernel's
+  cache entry, and its ``save``): replaced in numba's caching module by MendingCacheFile, which reads them
+  through the class's own ``load``, ``_load_index``, ``_load_data`` and ``_data_path``.
+  numba raises when an entry it reads is damaged (a truncated data file or index: an
+  interrupted copy, a full disk, a shared filesystem), and every later run fails on it
+  the same way; here the entry is discarded, the kernel compiled again (the same
+  compiled code: the cache holds what a compile makes) and saved anew, with one line on
+  stderr naming the file (see MendingCacheFile).
 The public alternative measured (docs/speed.md): a NUMBA_CACHE_DIR named by the content
 of all of ebrl/, tasks/ and experiments/ recompiles every kernel after any edit (21-22 s
 here, against 2-10 s for what depends on the edited file, and nothing for a file no
@@ -136,6 +150,32 @@ class _Dependent:
         return self
 
 
+class UserWideLocator(_Dependent, caching.UserWideCacheLocator):
+    """The user-wide cache folder's locator (where a kernel whose own folder cannot be
+    written caches), with the dependencies in its stamp."""
+
+
+class TemporaryLocator(_Dependent, caching.InTreeCacheLocator):
+    """The last resort, where no cache folder can be written: a temporary folder of this
+    process's own (removed at its exit), so the kernels compile once per process."""
+
+    def get_cache_path(self):
+        return _temporary_folder()
+
+
+@functools.lru_cache(maxsize=None)
+def _temporary_folder():
+    import atexit
+    import shutil
+    import tempfile
+    folder = tempfile.mkdtemp(prefix="ebrl-numba-")
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    print("ebrl: warning: no numba cache folder can be written (beside the source, "
+          "NUMBA_CACHE_DIR, the user's cache folder): the kernels compile in every process",
+          file=sys.stderr, flush=True)
+    return folder
+
+
 class UserDirLocator(_Dependent, caching.UserProvidedCacheLocator):
     """NUMBA_CACHE_DIR's locator, with the dependencies in its stamp."""
 
@@ -144,13 +184,94 @@ class InTreeLocator(_Dependent, caching.InTreeCacheLocator):
     """The __pycache__ locator, with the dependencies in its stamp."""
 
 
+#: What a damaged cache file is renamed to (path + DISCARDED) until the entry is saved
+#: again: the process that renames it is the one that says so.
+DISCARDED = ".discarded"
+
+
+def mended(path, error, left=None):
+    """The one line a damaged cache entry gives (stderr)."""
+    what = "discarded" if left is None else f"left in place ({left})"
+    print(f"ebrl: warning: numba cache file {path} could not be read ({error}); {what}, "
+          "compiling the kernel again", file=sys.stderr, flush=True)
+
+
+class MendingCacheFile(caching.IndexDataCacheFile):
+    """numba's index and data files of one kernel's cache entry, where an entry that
+    cannot be read (a truncated or garbled index, a truncated data file, an index naming
+    a missing data file) is discarded with one warning line (mended()) and reads as
+    absent: numba then compiles the kernel and saves the entry again.
+
+    One line however many processes read the damaged file at once (the runner's
+    workers): the damaged file is renamed to file + DISCARDED, and only the process
+    whose rename succeeds says so; a data file missing while its DISCARDED copy is there
+    is one that another process is compiling again, silently. save() removes the
+    DISCARDED copies. Where the file cannot be renamed (a folder that cannot be written)
+    it is left, the warning says so, and each process that reads it compiles the kernel."""
+
+    def _load_index(self):
+        try:
+            return super()._load_index()
+        except Exception as error:  # the index, not the kernel: any unpickling error
+            self._discard(self._index_path, error)
+            return {}
+
+    def save(self, key, data):
+        try:
+            super().save(key, data)
+        except OSError as error:  # a full disk, a folder turned read-only: run uncached
+            print(f"ebrl: warning: numba cache entry in {self._cache_path} could not be "
+                  f"saved ({type(error).__name__}: {error.strerror or error}); the kernel "
+                  "runs compiled but uncached", file=sys.stderr, flush=True)
+            return
+        for path in (self._index_path, self._data_path(self._load_index().get(key, ""))):
+            try:
+                os.unlink(path + DISCARDED)
+            except OSError:  # none (the common case)
+                pass
+
+    def load(self, key):
+        name = self._load_index().get(key)
+        if name is None:
+            return None
+        path = self._data_path(name)
+        try:
+            return self._load_data(name)
+        except FileNotFoundError:  # numba returns None here, silently
+            if not os.path.exists(path + DISCARDED):
+                mended(path, f"missing, named by {os.path.basename(self._index_path)}")
+            return None
+        except Exception as error:
+            self._discard(path, error)
+            return None
+
+    @staticmethod
+    def _discard(path, error):
+        error = f"{type(error).__name__}: {str(error).strip() or 'no message'}"
+        try:
+            os.replace(path, path + DISCARDED)
+        except FileNotFoundError:  # another process discarded it first, and said so
+            return
+        except OSError as e:
+            mended(path, error, f"{type(e).__name__}: {e.strerror or e}")
+            return
+        mended(path, error)
+
+
 def install():
-    """Puts the two locators first among numba's (once per process)."""
+    """Puts the locators first among numba's, and MendingCacheFile in place of numba's
+    cache files (once per process)."""
     impl = getattr(caching, "CacheImpl", None) or caching._CacheImpl  # numba < 0.62
     classes = impl._locator_classes
     for cls in (InTreeLocator, UserDirLocator):  # UserDirLocator ends up first
         if cls not in classes:
             classes.insert(0, cls)
+    wide = classes.index(caching.UserWideCacheLocator)
+    if UserWideLocator not in classes:
+        classes.insert(wide, UserWideLocator)  # just before numba's own
+    if TemporaryLocator not in classes:
+        classes.append(TemporaryLocator)
+    caching.IndexDataCacheFile = MendingCacheFile
 
 
 def covers(dispatcher):

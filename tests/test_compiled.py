@@ -1,5 +1,7 @@
 """ebrl.compiled: numba's on-disk cache follows every file a cached kernel compiles in,
 in real processes on real files (a kernel in one module calling a kernel in another)."""
+import os
+import pathlib
 import re
 import subprocess
 import sys
@@ -23,9 +25,9 @@ MAIN = textwrap.dedent("""\
     """)
 
 
-def _run(folder):
+def _run(folder, env=None):
     out = subprocess.run([sys.executable, "main.py"], cwd=folder, capture_output=True,
-                         text=True, check=True).stdout.split()
+                         text=True, check=True, env=env).stdout.split()
     return float(out[0]), int(out[1])
 
 
@@ -119,3 +121,97 @@ def test_each_module_imported_first_has_its_cached_kernels_keyed_on_their_depend
         out = subprocess.run([sys.executable, "-c", code, name], cwd=ROOT, capture_output=True,
                              text=True, check=True).stdout.split()
         assert int(out[0]) > 0 and out[0] == out[1], (name, out)
+
+
+# -- a damaged cache entry mends itself ----------------------------------------------
+def test_a_folder_that_cannot_be_written_caches_elsewhere_still_keyed(tmp_path):
+    """`__pycache__` unwritable (here a file in its place: unwritable for root too): the
+    kernels cache in the user's cache folder, keyed on their dependencies there as well;
+    no folder writable at all: they compile in every process, one warning line."""
+    _project(tmp_path, install=True)
+    (tmp_path / "callee.py").write_text(CALLEE.format(scale=3.0))
+    (tmp_path / "__pycache__").write_text("")
+    user = dict(os.environ, XDG_CACHE_HOME=str(tmp_path / "user"))
+    assert _run(tmp_path, user) == (7.0, 0)
+    assert _run(tmp_path, user) == (7.0, 1)
+    assert list((tmp_path / "user" / "numba").glob("*/caller.g-*.nbc"))
+    (tmp_path / "callee.py").write_text(CALLEE.format(scale=10.0))
+    assert _run(tmp_path, user) == (21.0, 0)
+    nowhere = dict(os.environ, XDG_CACHE_HOME=str(tmp_path / "__pycache__"))
+    proc = subprocess.run([sys.executable, "main.py"], cwd=tmp_path, capture_output=True,
+                          text=True, check=True, env=nowhere)
+    assert proc.stdout.split()[:2] == ["21.0", "0"]
+    assert proc.stderr.count("ebrl: warning: no numba cache folder can be written") == 1
+    assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+
+
+#: One run of the paper's two-wheel robot in a fresh process (the agent's, the task's
+#: and the loop's cached kernels): its result's digest and whether the loop came from the
+#: cache. Given "NAME:FILE:KIND" arguments, first the checkout's own cache of the kernels'
+#: modules is copied into NUMBA_CACHE_DIR's folders for them (numba's layout) and kernel
+#: NAME's FILE ("data" or "index") damaged as an interrupted copy or a full disk leaves
+#: it: cut to half its length ("truncated") or gone while its index names it ("missing").
+PROBE = textwrap.dedent("""\
+    import hashlib, pathlib, shutil, sys
+    from ebrl import kernels
+    from experiments.running import fused, protocol, runner
+    from tasks.kernels import body
+    folders = {}
+    for kernel in (kernels.learn_step, body.base_pose, fused.run):
+        folder = folders[kernel.py_func.__module__.rpartition(".")[2]] = pathlib.Path(
+            kernel.stats.cache_path)
+        source = pathlib.Path(kernel.py_func.__code__.co_filename).parent / "__pycache__"
+        for path in source.glob("*.nb[ic]") if sys.argv[1:] else ():
+            shutil.copy2(path, folder / path.name)
+    for what in sys.argv[1:]:
+        name, part, kind = what.split(":")
+        path, = folders[name.split(".")[0]].glob(
+            f"{name}-*.py*{'.1.nbc' if part == 'data' else '.nbi'}")
+        if kind == "missing":
+            path.unlink()
+        else:
+            path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+        print(path)
+    spec = runner.plan(["two_wheel"], ["avoidance"], [0], 600)[0]
+    result = protocol.execute(spec)
+    digest = hashlib.sha256()
+    for key in ("trial_ends", "trace", "starts"):
+        digest.update(result[key].tobytes())
+    print(digest.hexdigest(), sum(fused.run.stats.cache_hits.values()))
+    """)
+
+
+def _probe(env, *damage):
+    """(the damaged files, the digest, the loop's cache hits), and stderr."""
+    from helpers import ROOT
+    proc = subprocess.run([sys.executable, "-c", PROBE, *damage], cwd=ROOT, capture_output=True,
+                          text=True, check=True, env=env)
+    *damaged, digest, hits = proc.stdout.split()
+    return (damaged, digest, int(hits)), proc.stderr
+
+
+def test_the_agents_the_tasks_and_the_loops_damaged_entries_mend_with_the_same_bits(tmp_path):
+    """In real processes on a copy of the checkout's cache (NUMBA_CACHE_DIR): the loop
+    (experiments/running/fused.py) with its data file cut to half (issue 40's case: every
+    run failed, UnpicklingError), the agent's learn_step (ebrl/kernels.py) with its data
+    file missing, the task's base_pose (tasks/kernels/body.py) with its index cut to half.
+    The loop compiles again, reading the other two as it does: a warning line for each,
+    the run's bits unchanged, and the next process loads all from the rebuilt cache,
+    silently."""
+    plain = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    (_, expected, _), _ = _probe(plain)  # the checkout's own cache (compiled if cold)
+    copy = dict(plain, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    (damaged, digest, hits), err = _probe(copy, "fused.run:data:truncated",
+                                          "kernels.learn_step:data:missing",
+                                          "body.base_pose:index:truncated")
+    assert digest == expected and hits == 0
+    run, learn_step, base_pose = damaged
+    truncated = "(UnpicklingError: pickle data was truncated)"
+    said = [f"{run} could not be read {truncated}", f"{base_pose} could not be read {truncated}",
+            f"{learn_step} could not be read (missing, named by "
+            f"{pathlib.Path(learn_step).name.rsplit('.', 2)[0]}.nbi)"]
+    assert sorted(err.strip().splitlines()) == sorted(
+        f"ebrl: warning: numba cache file {line}; discarded, compiling the kernel again"
+        for line in said), err
+    (_, digest, hits), err = _probe(copy)
+    assert digest == expected and hits == 1 and err == ""

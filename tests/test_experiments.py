@@ -252,6 +252,9 @@ def test_a_failed_run_is_recorded_named_never_averaged_and_retried(clean_run, tm
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and failing in lines[0] and "PhysicsError" in lines[0], proc.stderr
     assert "7 runs made, 0 already on disk" in lines[0] and "Traceback" not in proc.stderr
+    # The same seed raises again: the line says so rather than "rerun to retry".
+    assert lines[0].endswith("; a rerun raises the same again (same seed, same result): each "
+                             "run.json holds its traceback")
     # The record: status, parameters, the error in one line and the worker's traceback.
     record = json.loads((out / failing / "run.json").read_text())
     assert record["status"] == "failed"
@@ -286,6 +289,8 @@ def test_a_worker_that_dies_fails_only_its_own_run(clean_run, tmp_path):
     proc = ebrl("run", *SMALL, "--workers", "2", "--out", out, env=env, check=False)
     assert proc.returncode == 1 and dying in proc.stderr and "WorkerDied" in proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1 and "Traceback" not in proc.stderr
+    assert proc.stderr.strip().endswith("; rerun the same command to retry the runs whose worker "
+                                        "was killed or died (out of memory: fewer --workers)")
     assert json.loads((out / dying / "run.json").read_text())["status"] == "failed"
     assert {k: v for k, v in arrays(out).items() if k != dying} == {
         k: v for k, v in arrays(clean_run).items() if k != dying}

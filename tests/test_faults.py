@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 import helpers
+from experiments.running import results, runner
 from helpers import ROOT
 
 SET = ["--robot", "two_wheel", "--condition", "all", "--seeds", "0-3", "--steps", "1000",
@@ -76,6 +77,9 @@ def test_a_crashed_worker_is_recorded_with_its_signal_whatever_the_workers(clean
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
     assert all(name in lines[0] for name in crash) and "6 runs made" in lines[0]
+    assert lines[0].endswith("; " + results.advice([f"WorkerDied: {s}" for s in crash.values()]))
+    assert "a crash in native code, which a rerun repeats" in lines[0]
+    assert "rerun the same command to retry the runs whose worker was killed" in lines[0]
     got = records(out)
     for name, sig in crash.items():
         assert got[name]["status"] == "failed" and got[name]["signal"] == sig
@@ -167,7 +171,7 @@ def test_a_folder_turned_read_only_mid_run_then_writable(clean, tmp_path, small_
 
 
 # -- Ray ---------------------------------------------------------------------------------
-def start_cluster(tries=3):
+def start_cluster(tries=3, cpus=2):
     """A local Ray cluster of one head node (2 CPUs), its processes this test's own. Ray
     waits at most 30 s for its raylet, too little on a heavily loaded machine: tried
     again then."""
@@ -175,7 +179,7 @@ def start_cluster(tries=3):
     for attempt in range(tries):
         cluster = ray_cluster.Cluster()
         try:
-            cluster.add_node(num_cpus=2, include_dashboard=False)
+            cluster.add_node(num_cpus=cpus, include_dashboard=False)
             return cluster
         except Exception:
             cluster.shutdown()
@@ -213,6 +217,9 @@ def test_ray_records_a_raised_run_and_a_dead_worker_as_the_local_pool_does(clean
     assert proc.returncode == 1, proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and raised in lines[0] and died in lines[0], proc.stderr
+    assert lines[0].endswith("; a rerun raises the same again (same seed, same result): each "
+                             "run.json holds its traceback")  # the killed one's advice before
+    assert "rerun the same command to retry the runs whose worker was killed" in lines[0]
     got = records(out)
     assert got[raised]["status"] == "failed" and got[raised]["error"] == (
         f"PhysicsError: failure injected by EBRL_TEST_FAIL (test only) in {raised}")
@@ -263,6 +270,121 @@ def test_a_lost_ray_cluster_is_one_line_and_keeps_the_finished_runs(clean, tmp_p
     again = records(out)
     assert len(again) == 8 and all(r["status"] == "complete" for r in again.values())
     assert all(again[k] == v for k, v in done.items())  # the finished runs kept as they were
+
+
+def _held(hold, node):
+    """The runs that wait on the file hold on the Ray node (EBRL_TEST_HOLD's markers)."""
+    return sorted(p.name.rsplit(".", 1)[1] for p in hold.parent.glob(f"{hold.name}.{node.node_id}.*"))
+
+
+def _until(condition, proc, what, seconds=300):
+    """Waits until condition() (a loaded machine may take minutes to start a Ray node)."""
+    deadline = time.time() + seconds
+    while not condition():
+        assert proc.poll() is None and time.time() < deadline, (what, proc.communicate())
+        time.sleep(0.05)
+
+
+def test_ray_across_nodes_a_lost_node_costs_its_runs_in_flight_and_a_new_node_takes_work(
+        clean, tmp_path):
+    """A head and two worker nodes, of one CPU each, on this machine: one worker node is
+    there from the start, the other added once a run is in flight on each of the first
+    two, and takes a run; then the first worker node is killed (all its processes,
+    SIGKILL) with its run in flight. The command makes every run, bit for bit the local
+    pool's."""
+    out, hold = tmp_path / "results", tmp_path / "hold"
+    hold.touch()  # every run waits, announced, until the file goes
+    cluster = start_cluster(cpus=1)
+    try:
+        lost = cluster.add_node(num_cpus=1)
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "experiments", "run", *SET, "--backend", "ray", "--out",
+             str(out)], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+            env=dict(env(EBRL_TEST_HOLD=str(hold)), RAY_ADDRESS=cluster.address))
+        _until(lambda: _held(hold, cluster.head_node) and _held(hold, lost), proc,
+               "a run in flight on each node")
+        added = cluster.add_node(num_cpus=1)
+        _until(lambda: _held(hold, added), proc, "a run on the added node")
+        cluster.remove_node(lost, allow_graceful=False)
+        hold.unlink()
+        stdout, stderr = proc.communicate(timeout=300)
+    finally:
+        cluster.shutdown()
+    assert proc.returncode == 0, stderr
+    # Ray's driver prints the lost node's raylet's end ("(raylet) Raylet is terminated...")
+    assert stdout.strip().splitlines()[-1].startswith("8 runs made, 0 already on disk"), stdout
+    assert summary(out) == summary(clean) and arrays(out) == arrays(clean)
+
+
+# -- what a failure line advises ------------------------------------------------------
+def _missing_library():
+    import ctypes
+    ctypes.CDLL("libebrl_no_such_library.so.1")
+
+
+def _damaged_install():
+    import importlib
+    importlib.import_module("ebrl_no_such_module")
+
+
+def _bad_robot_file():
+    import mujoco
+    mujoco.MjModel.from_xml_string("<mujoco><worldbody><body><geom type='sphere'/>"
+                                   "</body></worldbody><no_such_element/></mujoco>")
+
+
+def _out_of_memory():
+    np.empty(2 ** 62, dtype=np.uint8)
+
+
+def _unstable_simulation():
+    from dm_control.rl.control import PhysicsError
+    raise PhysicsError("Physics state is invalid. Warning(s) raised: mjWARN_BADQACC")
+
+
+#: Real errors of each kind a rerun cannot mend alone, raised here as a worker raises
+#: them (the runner records whatever the run raised): what the line says instead.
+CANNOT_RERUN = {
+    "library": (_missing_library, "a system library is missing (the error names it): "
+                                  "install it, then rerun"),
+    "install": (_damaged_install, "the install is damaged or incomplete: reinstall it "
+                                  "(pip install -e .), then rerun"),
+    "robot": (_bad_robot_file, "the robot file is bad (the error says where): fix it, then rerun"),
+    "memory": (_out_of_memory, "out of memory: rerun the same command with fewer --workers"),
+    "raised": (_unstable_simulation, "a rerun raises the same again (same seed, same result)"),
+}
+
+
+@pytest.mark.parametrize("kind", sorted(CANNOT_RERUN))
+def test_a_failure_that_a_rerun_cannot_mend_says_what_will(kind, tmp_path):
+    cause, said = CANNOT_RERUN[kind]
+    spec = runner.plan(["two_wheel"], ["avoidance"], [0], 200)[0]
+    with pytest.raises(BaseException) as raised:
+        cause()
+    line = results.write_failure(tmp_path, spec, raised.value)  # the record, as the runner's
+    assert results.failed_runs(tmp_path) == {"two_wheel/avoidance/seed_000": line}
+    assert results.failure_kind(line) == kind, line
+    assert results.failure_kind(f"{spec.name}: {line}") == kind  # as a study's trial holds it
+    assert results.advice([line]).startswith(said)
+    assert "to retry" not in results.advice([line])
+
+
+def test_the_rerun_advice_by_kind_through_the_commands(tmp_path):
+    """`ebrl report` on runs that failed each way: one line with each kind's advice once;
+    killed and crashed workers come from the crash test above, a raised run from
+    test_experiments, through `ebrl run`."""
+    for seed, kind in enumerate(sorted(CANNOT_RERUN)):
+        with pytest.raises(BaseException) as raised:
+            CANNOT_RERUN[kind][0]()
+        results.write_failure(tmp_path, runner.plan(["two_wheel"], ["avoidance"], [seed], 200)[0],
+                              raised.value)
+    proc = ebrl("report", tmp_path, check=False)
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and len(lines) == 1, proc.stderr
+    assert lines[0].startswith(f"ebrl: error: no complete runs under {tmp_path} (5 failed: ")
+    for kind, (_, said) in CANNOT_RERUN.items():
+        assert lines[0].count(said.replace("rerun the same command", "rerun `ebrl run`")
+                              .replace("then rerun", "then rerun `ebrl run`")) == 1, (kind, lines)
 
 
 # -- studies (`ebrl fit`) --------------------------------------------------------------
@@ -346,6 +468,8 @@ def test_a_trial_whose_runs_failed_is_marked_failed_not_scored(tmp_path):
     assert proc.returncode == 1, proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "trial 0" in lines[0] and "PhysicsError" in lines[0], proc.stderr
+    assert lines[0].endswith("; a rerun raises the same again (same seed, same result): each "
+                             "run.json holds its traceback")
     got = trials(out)
     assert [t.state for t in got] == [optuna.trial.TrialState.FAIL] * 2
     for t in got:

@@ -115,8 +115,9 @@ def run_summary(ran, path):
     if not ran.failed:
         print(line)
         return 0
+    from experiments.running import results
     return fail(f"{failed_line([(s.name, e) for s, e in ran.failed])}; recorded in "
-                f"run.json, not averaged; {line}; rerun the same command to retry",
+                f"run.json, not averaged; {line}; {results.advice(e for _, e in ran.failed)}",
                 RUNS_FAILED)
 
 
@@ -124,7 +125,8 @@ def finish(what, path, failed):
     """The last line of a command that runs many folders: what it wrote, or (exit 1) the
     failed (name, error) runs."""
     if failed:
+        from experiments.running import results
         return fail(f"{failed_line(failed)}; recorded in run.json, not averaged; "
-                    f"{what}: {path}; rerun the same command to retry", RUNS_FAILED)
+                    f"{what}: {path}; {results.advice(e for _, e in failed)}", RUNS_FAILED)
     print(f"{what}: {path}")
     return 0

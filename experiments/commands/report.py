@@ -41,5 +41,5 @@ def run(args):
     print(f"report: {path}")
     if failed:
         return fail(failed_line(sorted(failed.items()), "failed and not averaged")
-                    + "; rerun `ebrl run` to retry", RUNS_FAILED)
+                    + "; " + results.advice(failed.values(), "rerun `ebrl run`"), RUNS_FAILED)
     return 0

@@ -358,8 +358,9 @@ def failed_section(summary, heading="##"):
     if not failed:
         return []
     return ([f"{heading} Failed runs: {len(failed)}, not averaged", "",
-             "Each one's run.json holds its error and traceback; the command that made them, "
-             "run again, retries them.",
+             "Each one's run.json holds its error and traceback; what to do: "
+             + results.advice((f["error"] for f in failed), "run the command that made them "
+                              "again") + ".",
              ""] + [f"- `{f['run']}`: {f['error']}" for f in failed] + [""])
 
 

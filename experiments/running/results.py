@@ -7,7 +7,7 @@ without a complete run.json is unfinished, and a rerun redoes it from scratch.
 
 A run that raised has instead a run.json with status "failed": its parameters, the
 error in one line and the traceback (write_failure). It is never averaged, the
-report names it, and a rerun retries it.
+report names it, a rerun retries it, and advice() says whether that can help.
 """
 import contextlib
 import csv
@@ -18,6 +18,7 @@ import json
 import os
 import pathlib
 import platform
+import re
 import socket
 import subprocess
 import tempfile
@@ -224,6 +225,50 @@ def error_line(error, limit=300):
     return line if len(line) <= limit else line[: limit - 3] + "..."
 
 
+#: The kinds of failure a run's record can hold, first match first: (kind, whether its
+#: one-line error is of it, what to do; RERUN stands for the command to rerun). A rerun
+#: is suggested alone only where it can help: a run is computed the same way whenever
+#: it runs (same seed, same result), so a run that raised raises again.
+_NATIVE_CRASH = ("SIGSEGV", "SIGBUS", "SIGABRT", "SIGILL", "SIGFPE")
+FAILURE_KINDS = (
+    ("crashed", lambda e: e.startswith("WorkerDied:") and any(s in e for s in _NATIVE_CRASH),
+     "a crash in native code, which a rerun repeats (same seed, same computation): "
+     "reinstall the project and its libraries (pip install --force-reinstall -e .), "
+     "then RERUN"),
+    ("killed", lambda e: e.startswith("WorkerDied:"),
+     "RERUN to retry the runs whose worker was killed or died (out of memory: fewer "
+     "--workers)"),
+    ("library", lambda e: e.startswith(("ImportError:", "OSError:"))
+     and ("cannot open shared object file" in e or "Library not loaded" in e),
+     "a system library is missing (the error names it): install it, then RERUN"),
+    ("install", lambda e: e.startswith(("ModuleNotFoundError:", "ImportError:")),
+     "the install is damaged or incomplete: reinstall it (pip install -e .), then RERUN"),
+    ("robot", lambda e: e.startswith(("MountError:", "ContractError:")) or "XML Error" in e,
+     "the robot file is bad (the error says where): fix it, then RERUN"),
+    ("memory", lambda e: e.split(":")[0].endswith("MemoryError"),  # numpy's _ArrayMemoryError
+     "out of memory: RERUN with fewer --workers"),
+    ("raised", lambda e: True,
+     "a rerun raises the same again (same seed, same result): each run.json holds its "
+     "traceback"),
+)
+
+
+def failure_kind(error):
+    """The kind (FAILURE_KINDS) of a failed run's one-line error, alone or after its run
+    folder's name ("two_wheel/random/seed_000: WorkerDied: ...", as a study's trial
+    holds it)."""
+    error = re.sub(r"^[\w.-]+/[\w.-]+/seed_\d+: ", "", error)
+    return next(kind for kind, test, _ in FAILURE_KINDS if test(error))
+
+
+def advice(errors, rerun="rerun the same command"):
+    """What to do about failed runs with these one-line errors: each kind's advice once,
+    in FAILURE_KINDS' order, joined by '; '."""
+    kinds = {failure_kind(e) for e in errors}
+    return "; ".join(text.replace("RERUN", rerun) for kind, _, text in FAILURE_KINDS
+                     if kind in kinds)
+
+
 def write_failure(root, spec, error):
     """Records a run that raised error: run.json with status "failed", the run's
     parameters, the error in one line and its traceback (the worker's, when it came
@@ -282,19 +327,20 @@ def load_runs(root, specs=None):
     root = pathlib.Path(root)
     if not root.is_dir():
         raise ResultsError(f"no results folder at {root}")
-    runs, failed = {}, 0
+    runs, failed = {}, []
     paths = (sorted(root.glob("*/*/seed_*/run.json")) if specs is None
              else [run_dir(root, spec) / "run.json" for spec in specs])
     for path in paths:
         run = read_run_json(path)
         if run["status"] == "failed":
-            failed += 1
+            failed.append(run["error"])
             continue
         p = run["parameters"]
         runs[(p["robot"], p["condition"], p["seed"])] = run
     if not runs:
         raise ResultsError(f"no complete runs under {root}"
-                           + (f" ({failed} failed: rerun `ebrl run` to retry them)" if failed else ""))
+                           + (f" ({len(failed)} failed: {advice(failed, 'rerun `ebrl run`')})"
+                              if failed else ""))
     return runs
 
 

@@ -23,12 +23,16 @@ runs (robot/condition/seed) raise a dm_control PhysicsError in the worker, and
 EBRL_TEST_CRASH, with the same syntax, makes their worker process exit abruptly
 (status 70), or with "robot/condition/seed:SIGSEGV" crash in native code (ctypes
 reads address 0) or with ":SIGKILL" (any signal's name) be killed, once the run is
-computed; they exist for the tests of failure handling and are never set otherwise.
+computed. EBRL_TEST_HOLD=PATH makes every run, before it starts, announce itself (an
+empty file PATH.NODE.ROBOT_CONDITION_seed_NNN, NODE the Ray node's id or "local") and
+wait while PATH exists, so a test can take a Ray node away, or add one, with runs in
+flight. They exist for the tests of failure handling and are never set otherwise.
 """
 import collections
 import logging
 import os
 import signal
+import sys
 import threading
 import time
 
@@ -38,7 +42,7 @@ from experiments.running import protocol, results
 # comes from running several seeds at once. Set before workers import numpy.
 _SINGLE_THREAD = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
                                    "MKL_NUM_THREADS")}
-TEST_FAIL, TEST_CRASH = "EBRL_TEST_FAIL", "EBRL_TEST_CRASH"
+TEST_FAIL, TEST_CRASH, TEST_HOLD = "EBRL_TEST_FAIL", "EBRL_TEST_CRASH", "EBRL_TEST_HOLD"
 
 #: What run() did: runs made now, runs already on disk, and (spec, error) per failed run.
 Ran = collections.namedtuple("Ran", "made on_disk failed")
@@ -91,6 +95,13 @@ def _selected(variable, spec):
 
 def _execute(spec):
     """A worker's task (never run by the driver itself)."""
+    hold = os.environ.get(TEST_HOLD)
+    if hold:
+        ray = sys.modules.get("ray")
+        node = ray.get_runtime_context().get_node_id() if ray else "local"
+        open(f"{hold}.{node}.{spec.name.replace('/', '_')}", "w").close()
+        while os.path.exists(hold):
+            time.sleep(0.05)
     if _selected(TEST_FAIL, spec) is not None:
         from dm_control.rl.control import PhysicsError
         raise PhysicsError(f"failure injected by {TEST_FAIL} (test only) in {spec.name}")
@@ -351,7 +362,7 @@ def _init_ray(ray, workers):
     """Connects to the cluster at RAY_ADDRESS, or starts one here with `workers` CPUs."""
     address = os.environ.get("RAY_ADDRESS") or None
     # The test-only hooks travel to workers that a cluster started elsewhere runs.
-    env = dict(_SINGLE_THREAD, **{k: os.environ[k] for k in (TEST_FAIL, TEST_CRASH)
+    env = dict(_SINGLE_THREAD, **{k: os.environ[k] for k in (TEST_FAIL, TEST_CRASH, TEST_HOLD)
                                   if os.environ.get(k)})
     kwargs = {"address": address, "include_dashboard": False, "log_to_driver": False,
               "logging_level": logging.WARNING, "runtime_env": {"env_vars": env}}

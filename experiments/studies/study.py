@@ -246,7 +246,7 @@ def storage_errors(study):
         url = _OPENED[study].url if study in _OPENED else ""
         raise StorageError(hide(f"lost the study storage {shown(url)}: "
                                 f"{results.error_line(e)}; the finished trials are kept: "
-                                "rerun the same command to resume", url)) from None
+                                "rerun the same command when it answers again", url)) from None
 
 
 def load(name, storage, out, seed=0, create=True, sampler=None, first=None):
