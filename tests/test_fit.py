@@ -76,20 +76,19 @@ def test_the_objective_by_hand_on_a_changed_figure_and_a_failing_claim():
 
 
 def test_overrides_keep_agent_readings_for_both_robots_and_drop_defaults():
-    floating_reliability = fit.default("initial_reliability")        # the floating robot's
-    assert floating_reliability == fit.default("initial_reliability", "floating")
-    assert fit.default("initial_reliability", "two_wheel") == 1.0   # Table 1's (ebrl.Config)
-    params = {"policy_threshold": 0.3, "bump": "grip",
-              "initial_reliability": floating_reliability, "radius": 2.0,
-              "thrust": "scaled"}
+    threshold = fit.default("policy_threshold")        # protocol 6's: one learner, both robots
+    assert threshold == fit.default("policy_threshold", "floating") == \
+        fit.default("policy_threshold", "two_wheel") > 0
+    assert fit.default("initial_reliability", "two_wheel") == 1.0   # the default (ebrl.Config)
+    params = {"policy_threshold": threshold, "bump": "grip", "initial_reliability": 0.5,
+              "radius": 2.0, "thrust": "scaled"}
     # A shared reading is run as given on each robot, left out where it is the robot's own.
-    assert fit.overrides(params, "two_wheel") == (("initial_reliability", floating_reliability),
-                                                  ("policy_threshold", 0.3))
-    assert fit.overrides(params, "floating") == (("bump", "grip"), ("policy_threshold", 0.3),
+    assert fit.overrides(params, "two_wheel") == (("initial_reliability", 0.5),)
+    assert fit.overrides(params, "floating") == (("bump", "grip"), ("initial_reliability", 0.5),
                                                  ("radius", 2.0))
-    params["initial_reliability"] = 1.0
-    assert fit.overrides(params, "two_wheel") == (("policy_threshold", 0.3),)
-    assert ("initial_reliability", 1.0) in fit.overrides(params, "floating")
+    params["initial_reliability"], params["policy_threshold"] = 1.0, 0.1
+    assert fit.overrides(params, "two_wheel") == (("policy_threshold", 0.1),)
+    assert ("initial_reliability", 1.0) not in fit.overrides(params, "floating")
 
 
 def _trials(out):
