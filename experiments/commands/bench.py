@@ -11,10 +11,11 @@ def add_parser(subparsers):
                    help="timed steps per block")
     p.add_argument("--blocks", type=arguments.up_to(validate.MAX_BENCH_BLOCKS), default=5,
                    help="medians over this many blocks")
+    arguments.add_room(p)
     p.set_defaults(func=run)
 
 
 def run(args):
     from experiments.checks import bench
-    bench.main(args.steps, args.blocks, args.robot)
+    bench.main(args.steps, args.blocks, args.robot, args.room)
     return 0

@@ -24,13 +24,19 @@ def selected_robots(args):
 
 def check_robots(args):
     """Registered robots are known; a robot file is loaded once here, so a missing part
-    (the naming contract, docs/adding_a_robot.md) is one line before any run."""
+    (the naming contract, docs/adding_a_robot.md) is one line before any run; in a room
+    other than the paper's (--room), every robot is composed into it, so a corridor
+    narrower than a robot is one line too (models.rooms.check_fits)."""
     from tasks.robots import ROBOTS, resolve
+    room = getattr(args, "room", None)
     for robot in selected_robots(args):
-        resolve(robot, args.drive)
+        entry = resolve(robot, args.drive)
         if robot not in ROBOTS:
             import tasks
-            tasks.load(robot, drive=args.drive).close()
+            tasks.load(robot, drive=args.drive, room=room).close()
+        elif room is not None:
+            import tasks
+            tasks.compile_robot(entry, entry.task_config(), room)
 
 
 def check_agent(args, overrides):
@@ -88,7 +94,7 @@ def plan(args, overrides=()):
     conditions = paper.CONDITIONS if args.condition == "all" else (args.condition,)
     return runner.plan(selected_robots(args), conditions, args.seeds, args.steps, overrides,
                        args.drive, getattr(args, "agent", "ebrl"),
-                       getattr(args, "first_trial", False))
+                       getattr(args, "first_trial", False), getattr(args, "room", None))
 
 
 def report_if_any(folder, ran):
