@@ -29,8 +29,8 @@ def add_parser(subparsers):
                               help="both robots, both conditions, in random mazes of several sizes")
     p.add_argument("--sizes", type=sizes, default=mazes.SIZES, metavar="WxH,...",
                    help="maze sizes in cells (default: 9x6,15x15,21x21)")
-    p.add_argument("--mazes", type=arguments.up_to(100), default=4, help="mazes per size")
-    p.add_argument("--seeds", type=arguments.up_to(100), default=3, help="seeds per maze")
+    p.add_argument("--mazes", type=arguments.up_to(100), default=3, help="mazes per size")
+    p.add_argument("--seeds", type=arguments.up_to(100), default=2, help="seeds per maze")
     p.add_argument("--steps-per-cell", type=arguments.up_to(100_000), default=mazes.STEPS_PER_CELL,
                    help="the budget: agent steps per cell of the maze's shortest path "
                         "(default: %(default)s)")

@@ -42,12 +42,14 @@ def budget(size, maze, per_cell=STEPS_PER_CELL):
     return per_cell * rooms.load(room(size, maze)).shortest_cells()
 
 
-def plan(sizes=SIZES, mazes=4, seeds=3, per_cell=STEPS_PER_CELL, robots=ROBOTS):
-    """The study's specs: every robot, condition, size, maze (0..mazes-1) and seed."""
+def plan(sizes=SIZES, mazes=3, seeds=2, per_cell=STEPS_PER_CELL, robots=ROBOTS):
+    """The study's specs: every robot, condition, size, maze (0..mazes-1) and seed; in
+    the order to run them: seed by seed, maze by maze, every size, so that a study cut
+    short holds whole (maze, seed) units of every size."""
     return [protocol.RunSpec(robot, condition, seed, budget(size, maze, per_cell),
                              room=room(size, maze))
-            for size in sizes for maze in range(mazes) for robot in robots
-            for condition in CONDITIONS for seed in range(seeds)]
+            for seed in range(seeds) for maze in range(mazes) for size in sizes
+            for robot in robots for condition in CONDITIONS]
 
 
 def run(out, specs, workers=1, progress=True):
