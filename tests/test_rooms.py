@@ -72,18 +72,15 @@ def test_a_bad_map_is_one_line_naming_its_file(text, words):
 def test_bad_maps_on_the_command_line(tmp_path):
     """Exit 2 and one line naming the file, before any work: a bad character (at
     parsing), and a corridor narrower than the robot (composing the robot in)."""
-    bad = tmp_path / "bad.txt"
-    bad.write_text("*****\n*P?G*\n*****\n")
-    proc = ebrl("run", "--robot", "two_wheel", "--room", bad, "--out", tmp_path / "out")
-    assert proc.returncode == 2 and not (tmp_path / "out").exists()
-    assert len(proc.stderr.strip().splitlines()) == 1
-    assert str(bad) in proc.stderr and "unknown character '?'" in proc.stderr
-    narrow = tmp_path / "narrow.txt"
-    narrow.write_text("# cell 2.5\n*****\n*P G*\n*****\n")
-    proc = ebrl("run", "--robot", "floating", "--room", narrow, "--out", tmp_path / "out")
-    assert proc.returncode == 2 and not (tmp_path / "out").exists()
-    assert len(proc.stderr.strip().splitlines()) == 1
-    assert str(narrow) in proc.stderr and "narrower than the robot" in proc.stderr
+    for robot, text, words in (("two_wheel", "*****\n*P?G*\n*****\n", "unknown character '?'"),
+                               ("floating", "# cell 2.5\n*****\n*P G*\n*****\n",
+                                "narrower than the robot")):
+        bad = tmp_path / f"{robot}.txt"
+        bad.write_text(text)
+        proc = ebrl("run", "--robot", robot, "--room", bad, "--out", tmp_path / "out")
+        assert proc.returncode == 2 and not (tmp_path / "out").exists()
+        assert len(proc.stderr.strip().splitlines()) == 1
+        assert str(bad) in proc.stderr and words in proc.stderr
 
 
 @pytest.mark.parametrize("size", [(9, 6), (21, 21), (4, 7)])
