@@ -27,7 +27,7 @@ CONDITIONS = ("random", "avoidance")
 #: The default sizes (W x H cells): the paper's 9 x 6 first.
 SIZES = ((9, 6), (15, 15), (21, 21))
 #: Agent steps per cell of a maze's shortest path (the budget rule).
-STEPS_PER_CELL = 2000
+STEPS_PER_CELL = 1000
 BOOTSTRAP_SAMPLES = 10_000
 BOOTSTRAP_SEED = 20000
 BEGIN, END = "<!-- maze-study:begin -->", "<!-- maze-study:end -->"
