@@ -271,7 +271,7 @@ def check_fits(m: Map, radius: float) -> None:
     """MapError when a corridor (one cell) is narrower than the robot (radius in units)."""
     if m.cell <= 2 * radius:
         raise MapError(f"{m.source}: corridors of {m.cell:g} units are narrower than the "
-                       f"robot ({2 * radius:g} units across); set '# cell N' larger")
+                       f"robot ({2 * radius:.3g} units across); set '# cell N' larger")
 
 
 def merged_walls(m: Map) -> list[tuple[int, int, int, int]]:

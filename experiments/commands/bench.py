@@ -1,6 +1,7 @@
 """`ebrl bench`: microseconds per agent step, by part (experiments.checks.bench)."""
 from experiments.checks import validate
 from experiments.commands import arguments
+from experiments.commands.common import check_room, fail
 
 
 def add_parser(subparsers):
@@ -16,6 +17,10 @@ def add_parser(subparsers):
 
 
 def run(args):
+    try:
+        check_room(args.robot, args.room)
+    except ValueError as e:
+        return fail(str(e))
     from experiments.checks import bench
     bench.main(args.steps, args.blocks, args.robot, args.room)
     return 0

@@ -30,13 +30,24 @@ def check_robots(args):
     from tasks.robots import ROBOTS, resolve
     room = getattr(args, "room", None)
     for robot in selected_robots(args):
-        entry = resolve(robot, args.drive)
+        resolve(robot, args.drive)
         if robot not in ROBOTS:
             import tasks
             tasks.load(robot, drive=args.drive, room=room).close()
-        elif room is not None:
-            import tasks
-            tasks.compile_robot(entry, entry.task_config(), room)
+        else:
+            check_room((robot,), room)
+
+
+def check_room(robots, room, drive=None):
+    """Each robot composed into the room (--room; None: the paper's, nothing to check):
+    models.rooms.MapError, one line, when a corridor is narrower than a robot."""
+    if room is None:
+        return
+    import tasks
+    from tasks.robots import resolve
+    for robot in robots:
+        entry = resolve(robot, drive)
+        tasks.compile_robot(entry, entry.task_config(), room)
 
 
 def check_agent(args, overrides):

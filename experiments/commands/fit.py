@@ -5,7 +5,7 @@ import pathlib
 
 from experiments.checks import validate
 from experiments.commands import arguments
-from experiments.commands.common import fail, finish, study_storage
+from experiments.commands.common import check_room, fail, finish, study_storage
 
 
 def add_parser(subparsers):
@@ -60,6 +60,7 @@ def _check(args):
     """Every argument checked before any work: (space names, storage URL); for --stage
     first-trial, ((space names, rungs), storage URL)."""
     from experiments.studies import fit
+    check_room(fit.ROBOTS if args.robot is None else (args.robot,), args.room)
     if args.stage == "first-trial":
         from experiments.studies import first_trials
         names, rungs = first_trials.check_args(args.robot, args.space, args.seeds,
