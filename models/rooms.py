@@ -181,11 +181,12 @@ def parse(text: str, source: str, name: str | None = None) -> Map:
 def random_map(width: int, height: int, seed: int) -> Map:
     """A labmaze.RandomMaze of width x height inner cells (its defaults, the seed's).
 
-    labmaze draws odd sizes only: an even side is drawn one cell larger and its last
-    wall line (the inner line next to the east or north border) is removed. Free cells
-    the start cannot reach become walls. The start is the free cell nearest the
-    south-west corner (the westmost column, then the southmost row); the goal, the free
-    cell farthest from it in cell moves (ties: the last in row order from the top)."""
+    labmaze draws odd sizes only: an even side is drawn one cell larger and one of its
+    wall lines removed (labmaze's corridors lie on odd lines, its walls on even ones: the
+    column before the eastmost corridor column, the row below the northmost corridor row).
+    Free cells the start cannot reach become walls. The start is the free cell nearest
+    the south-west corner (the westmost column, then the southmost row); the goal, the
+    free cell farthest from it in cell moves (ties: the southmost, then the eastmost)."""
     import labmaze
     lo, hi = RANDOM_SIZES
     if not (lo <= width <= hi and lo <= height <= hi):
@@ -194,9 +195,9 @@ def random_map(width: int, height: int, seed: int) -> Map:
     maze = labmaze.RandomMaze(height=h + 2, width=w + 2, random_seed=int(seed))
     grid = [list(line) for line in str(maze.entity_layer).splitlines()]
     grid = [[WALL if ch == WALL else FREE for ch in row] for row in grid]
-    if w != width:  # drop the inner column next to the east border's inner one
+    if w != width:  # grid column w is the eastmost corridor column; w - 1 a wall line
         grid = [row[:w - 1] + row[w:] for row in grid]
-    if h != height:  # drop the inner row two below the north border
+    if h != height:  # grid row 1 is the northmost corridor row; row 2 a wall line
         grid = grid[:2] + grid[3:]
     name = f"random:{width}x{height}:{seed}"
     free = [(c - 1, len(grid) - 2 - r) for r, row in enumerate(grid)
@@ -259,9 +260,7 @@ def _shipped(name):
 def tag(room) -> str:
     """The room's name in folders and tables: a shipped map's name, random-WxH-SEED,
     or a map file's stem."""
-    room = DEFAULT if room is None else room
-    m = load(room) if isinstance(room, Map) else None
-    text = m.name if m is not None else str(room)
+    text = room.name if isinstance(room, Map) else str(DEFAULT if room is None else room)
     if text in MAPS or RANDOM.match(text):
         return text.replace(":", "-")
     return pathlib.Path(text).stem
