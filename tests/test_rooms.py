@@ -172,3 +172,24 @@ def test_rooms_lists_the_shipped_maps():
     for name in rooms.MAPS:
         assert f"\n{name} " in proc.stdout
     assert "random:WxH:SEED" in proc.stdout
+
+
+def test_the_maze_study_runs_its_budget_rule_and_writes_its_table(tmp_path):
+    """A tiny maze study: the budget is the rule's, every (maze, seed) unit of every size
+    comes before the next seed's, and MAZES.md has a row per robot and size."""
+    from experiments.studies import mazes
+    sizes = ((5, 5), (7, 4))
+    specs = mazes.plan(sizes, mazes=1, seeds=2, per_cell=15)
+    assert len(specs) == 2 * 2 * 2 * 2
+    assert [s.seed for s in specs] == [0] * 8 + [1] * 8
+    for s in specs:
+        assert s.steps == 15 * rooms.load(s.room).shortest_cells()
+    ran = mazes.run(tmp_path, specs, workers=1, progress=False)
+    assert ran.made == len(specs) and not ran.failed
+    path = mazes.write(tmp_path, specs, sizes, 1, 2, 15)
+    rows = json.loads((tmp_path / "mazes.json").read_text())["rows"]
+    assert {(r["robot"], r["size"]) for r in rows} == {
+        (robot, size) for robot in mazes.ROBOTS for size in ("5x5", "7x4")}
+    assert all(r["units"] == 2 for r in rows)
+    text = path.read_text()
+    assert "| two_wheel | 7x4 | 2 |" in text and (tmp_path / "figures" / "mazes.png").stat().st_size > 0
