@@ -1,6 +1,8 @@
-"""MJCF models: Sutton's room and one file per robot, composed at load time.
+"""MJCF models: the rooms (maps) and one file per robot, composed at load time.
 
-`compose(robot_file)` attaches a robot file to ``room.xml`` with MuJoCo's own
+A room is a map (models.rooms: text maps in labmaze's convention, made into MJCF; the
+paper's room is the shipped map `sutton`, the default).
+`compose(robot_file, room=...)` attaches a robot file to the room with MuJoCo's own
 ``MjSpec.attach`` under the name prefix ``robot/``, so every robot exposes the same
 element names (``robot/base``, ``robot/hull``, ``robot/range_0`` ...). A robot file's
 top-level bodies enter the room's world body directly, so a free joint is allowed.
@@ -63,7 +65,6 @@ UNIT_NUMERIC = "ebrl_unit"
 NAMES_TEXT = "ebrl_names"
 
 MODEL_DIR = pathlib.Path(__file__).resolve().parent
-ROOM_FILE = MODEL_DIR / "room.xml"
 
 INTEGRATORS = {"Euler": mujoco.mjtIntegrator.mjINT_EULER,
                "RK4": mujoco.mjtIntegrator.mjINT_RK4,
@@ -71,18 +72,26 @@ INTEGRATORS = {"Euler": mujoco.mjtIntegrator.mjINT_EULER,
                "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST}
 
 
-def compose(robot_file, *, timestep=None, integrator=None, unit=UNIT, robot=None):
+def room_spec(room=None):
+    """The room's MjSpec (a map's name, random:WxH:SEED, a map file or a rooms.Map; None:
+    the paper's `sutton`), at the paper's unit; rooms.MapError for a bad map."""
+    from models import rooms
+    return mujoco.MjSpec.from_string(rooms.room_xml(room))
+
+
+def compose(robot_file, *, timestep=None, integrator=None, unit=UNIT, robot=None, room=None):
     """An MjSpec of the room with the robot file attached at the origin.
 
     timestep (s) and integrator ("Euler", "implicitfast", ...) replace the room's
     when given: a robot file's own <option> is not used (attaching keeps the room's).
     unit: metres per paper unit; the room is scaled by unit / UNIT about the origin
     (scale_room). robot: the robot's MjSpec, already made (a mount's); else the file's.
+    room: the room (room_spec); None: the paper's.
     """
     path = pathlib.Path(robot_file)
     if not path.is_file():
         raise ValueError(f"no robot file at {path}")
-    room = mujoco.MjSpec.from_file(str(ROOM_FILE))
+    room = room_spec(room)
     if unit != UNIT:
         scale_room(room, unit)
     if robot is None:
@@ -173,6 +182,6 @@ def _planar_axis(quat):
     return mat[0], mat[3]
 
 
-def room_model():
+def room_model(room=None):
     """The room alone, compiled (for its layout)."""
-    return mujoco.MjModel.from_xml_path(str(ROOM_FILE))
+    return room_spec(room).compile()

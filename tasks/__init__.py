@@ -9,6 +9,7 @@ import dataclasses
 import os
 
 import models  # first: it imports MuJoCo and dm_control with rendering off (tasks.render)
+from models import rooms
 
 import dm_env
 import mujoco
@@ -76,21 +77,29 @@ class Environment(control.Environment):
             physics.free()
 
 
-def compile_robot(entry: Robot, config: TaskConfig = TaskConfig()) -> tuple[mujoco.MjModel, mujoco.MjSpec]:
+def compile_robot(entry: Robot, config: TaskConfig = TaskConfig(),
+                  room=None) -> tuple[mujoco.MjModel, mujoco.MjSpec]:
     """(MjModel, MjSpec) of the room with the registry entry's robot, and the task
-    config's changes to the model: the robot's radius, the floating bump's walls."""
+    config's changes to the model: the robot's radius, the floating bump's walls.
+    room: a map's name, random:WxH:SEED or a map file (models.rooms); None: the paper's.
+    rooms.MapError when the map is bad or its corridors are narrower than the robot."""
     robot = None
     if entry.mount is not None:
         from tasks import mount
         robot = mount.robot_spec(entry.mount)
     spec = models.compose(entry.model, timestep=entry.timestep, integrator=entry.integrator,
-                          unit=entry.unit, robot=robot)
+                          unit=entry.unit, robot=robot, room=room)
     _DRIVES[entry.drive][2](spec, config)
     try:
-        return spec.compile(), spec
+        model = spec.compile()
     except ValueError as e:
         raise ValueError(f"{_source(entry)} does not compile in the room: "
                          f"{str(e).splitlines()[0]}") from None
+    if room is not None:
+        radius = navigation.robot_radius(model) if navigation.named_id(
+            model, mujoco.mjtObj.mjOBJ_GEOM, "hull") >= 0 else 0.0
+        rooms.check_fits(rooms.load(room), radius)
+    return model, spec
 
 
 def _source(entry):
@@ -99,16 +108,17 @@ def _source(entry):
 
 
 def load(robot: str | os.PathLike | Robot, *, drive: str | None = None, seed: int | None = None,
-         config: TaskConfig | None = None, **fields) -> Environment:
+         config: TaskConfig | None = None, room=None, **fields) -> Environment:
     """The navigation environment for `robot`: a name in tasks.ROBOTS or tasks.MOUNTS, a
     path to a mount file (.toml, tasks.mount), or a path to a robot file with drive
     "two_wheel" or "floating". config: a TaskConfig (default: the
-    paper's with the robot's readings, Robot.task_config); fields: TaskConfig fields to
-    change (sensor_noise=0.0, bump="slide", ...)."""
+    paper's with the robot's readings, Robot.task_config); room: the room (a shipped
+    map's name, "random:WxH:SEED" or a map file: models.rooms; None: the paper's
+    `sutton`); fields: TaskConfig fields to change (sensor_noise=0.0, bump="slide", ...)."""
     entry = robot if isinstance(robot, Robot) else resolve(robot, drive)
     config = dataclasses.replace(config or entry.task_config(), **fields)
     task_cls, physics_classes, _ = _DRIVES[entry.drive]
-    model, _ = compile_robot(entry, config)
+    model, _ = compile_robot(entry, config, room)
     names = {mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, i)
              for i in range(model.nu)}
     physics_cls = next((cls for act, cls in physics_classes.items()

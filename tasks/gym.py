@@ -10,9 +10,9 @@ loads plugins at import, so a process that did not, a worker of a vector environ
 started with spawn or forkserver say, finds it through `"tasks.gym:EBRL/TwoWheel-v0"`:
 `gymnasium.make` imports the module before the id, and registering again is harmless.
 Options of
-`tasks.load` pass through: any field of tasks.TaskConfig (`sensor_noise`, `action_noise`,
-`start_jitter`, `bump`, ...); and `max_episode_steps` (default: the robot's budget of
-Section 3.6).
+`tasks.load` pass through: `room` (models.rooms: "medium", "random:21x21:3", a map file),
+any field of tasks.TaskConfig (`sensor_noise`, `action_noise`, `start_jitter`, `bump`,
+...); and `max_episode_steps` (default: the robot's budget of Section 3.6).
 
 A thin adapter of our dm_env tasks rather than Shimmy's dm_control converter: reset(seed)
 must reseed the task's own random stream (start jitter, sensor and action noise) to

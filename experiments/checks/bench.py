@@ -20,12 +20,12 @@ from ebrl.benchmark import reference_pass
 from experiments.running import protocol
 
 
-def measure(robot, steps, blocks=5):
+def measure(robot, steps, blocks=5, room=None):
     """Medians over `blocks` blocks of `steps` timed steps each (this machine's timings
     vary by about 10% from one moment to the next; the median of blocks much less)."""
     import tasks
-    spec = protocol.RunSpec(robot, "avoidance", 0, steps)
-    env = tasks.load(spec.entry, seed=0)
+    spec = protocol.RunSpec(robot, "avoidance", 0, steps, room=room)
+    env = tasks.load(spec.entry, seed=0, room=spec.room)
     agent = protocol.make_agent(spec, env)
     config = spec.agent_config()
     keys = tuple(key for key, _ in spec.entry.modalities)
@@ -69,8 +69,9 @@ def measure(robot, steps, blocks=5):
     # The protocol's own loop: stretches of steps in one compiled call (experiments.running.fused).
     env.close()
     fused_times = []
-    spec = protocol.RunSpec(robot, "avoidance", 0, config.memory_size + 200 + blocks * steps)
-    env = tasks.load(spec.entry, seed=0)
+    spec = protocol.RunSpec(robot, "avoidance", 0, config.memory_size + 200 + blocks * steps,
+                            room=room)
+    env = tasks.load(spec.entry, seed=0, room=spec.room)
     trials = protocol.Trials(env, protocol.make_agent(spec, env), keys, spec.steps)
     if trials.fused:
         trials.run(config.memory_size + 200)  # fill the memory first, as above
@@ -87,12 +88,13 @@ def measure(robot, steps, blocks=5):
             "whole_loop": whole, "fused_loop": fused_loop, "reference_pass": ref}
 
 
-def main(steps=2000, blocks=5, robots=None):
+def main(steps=2000, blocks=5, robots=None, room=None):
     from tasks.kernels.bindings import stage_timers_off
     from tasks.robots import ROBOTS
     with stage_timers_off():  # as `ebrl run` steps (protocol.execute), raw physics too
-        rows = [measure(robot, steps, blocks) for robot in (robots or tuple(ROBOTS))]
-    print(f"microseconds per agent step, memory full: medians of {blocks} blocks of {steps} steps")
+        rows = [measure(robot, steps, blocks, room) for robot in (robots or tuple(ROBOTS))]
+    print(f"microseconds per agent step, memory full: medians of {blocks} blocks of {steps} steps"
+          + (f", room {room}" if room is not None else ""))
     head = ("robot", "memory", "substeps", "raw physics", "env.step", "tasks", "env/raw",
             "ref pass", "agent", "agent/ref", "whole loop", "loop/(raw+ref)", "fused loop",
             "fused/(raw+ref)")

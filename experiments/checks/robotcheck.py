@@ -43,15 +43,15 @@ def open_spot(layout):
     return max(points, key=lambda p: clearance(layout, *p))
 
 
-def _quiet(robot, drive):
+def _quiet(robot, drive, room=None):
     import tasks
     env = tasks.load(robot, drive=drive, seed=0, sensor_noise=0.0, action_noise=0.0,
-                     start_jitter=False)
+                     start_jitter=False, room=room)
     env.reset()
     return env
 
 
-def accuracy(robot, actions=1000, seed=0, drive=None):
+def accuracy(robot, actions=1000, seed=0, drive=None, room=None):
     """Errors of random noise-free actions in free space: for the two_wheel drive,
     |achieved - commanded| turn (rad) and move (units); for the floating drive, the
     velocity change (units/step) on each axis. Returns the error arrays and limits."""
@@ -59,7 +59,7 @@ def accuracy(robot, actions=1000, seed=0, drive=None):
     import tasks
     from tasks import floating, two_wheel
     entry = tasks.resolve(robot, drive)
-    env = _quiet(entry, None)
+    env = _quiet(entry, None, room)
     physics = env.physics
     x, y = open_spot(models.room_layout(physics.model))
     rng = np.random.default_rng(seed)
@@ -92,7 +92,7 @@ def accuracy(robot, actions=1000, seed=0, drive=None):
     return {k: np.abs(v) for k, v in errors.items()}, limits
 
 
-def fuzz(robot, actions=100_000, seed=0, drive=None):
+def fuzz(robot, actions=100_000, seed=0, drive=None, room=None):
     """Random actions biased to keep ramming walls, resetting at the goal; returns the
     worst clearance (units), the largest tilt (degrees), NaN and warning counts, and the
     seconds it took; the falls (a PhysicsError: unstable, tipped over), each followed by a
@@ -102,7 +102,7 @@ def fuzz(robot, actions=100_000, seed=0, drive=None):
     import models
     import tasks
     entry = tasks.resolve(robot, drive)
-    env = tasks.load(entry, seed=seed)
+    env = tasks.load(entry, seed=seed, room=room)
     physics = env.physics
     layout = models.room_layout(physics.model)
     data = physics.data.ptr
@@ -141,20 +141,20 @@ def fuzz(robot, actions=100_000, seed=0, drive=None):
             "seconds": time.perf_counter() - started}
 
 
-def main(robots, actions, accuracy_actions, drive=None):
+def main(robots, actions, accuracy_actions, drive=None, room=None):
     """Prints both checks for each robot; returns 0 if every robot passes, else 1."""
     import tasks
     from tasks import navigation
     failed = 0
     for robot in robots:
-        errors, limits = accuracy(robot, accuracy_actions, drive=drive)
+        errors, limits = accuracy(robot, accuracy_actions, drive=drive, room=room)
         for key, e in errors.items():
             ok = e.max() <= limits[key]
             failed += not ok
             print(f"{robot}: {key} error over {len(e)} free-space actions: median {np.median(e):.4f}, "
                   f"95% {np.percentile(e, 95):.4f}, max {e.max():.4f} (limit {limits[key]:.3f}) "
                   f"{'ok' if ok else 'FAIL'}")
-        r = fuzz(robot, actions, drive=drive)
+        r = fuzz(robot, actions, drive=drive, room=room)
         max_tilt = navigation.MAX_TILT_DEGREES
         if "falls" in dict(tasks.resolve(robot, drive).accuracy_limits):
             max_tilt = 90.0  # a gait's falls are counted instead (tasks.gait's max_tilt)

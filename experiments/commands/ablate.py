@@ -12,6 +12,7 @@ def add_parser(subparsers):
     p = subparsers.add_parser("ablate",
                               help="the readings ablation: one reading changed at a time")
     arguments.add_robots(p, "paper")
+    arguments.add_room(p)
     p.add_argument("--seeds", type=arguments.seeds, default=list(range(10)))
     p.add_argument("--steps", type=arguments.up_to(validate.MAX_STEPS), default=None)
     p.add_argument("--readings", default="all",
@@ -77,7 +78,7 @@ def run(args):
     try:
         cell_runs, failed = ablation.run(args.out, selected_robots(args), args.seeds,
                                          args.steps, readings, combos, args.baseline,
-                                         args.workers, not args.no_progress)
+                                         args.workers, not args.no_progress, args.room)
         path = ablation.write(args.out, ablation.summarize(cell_runs), failed)
         if args.results is not None:
             print(f"published: {ablation.publish(args.out, args.results)}")

@@ -104,6 +104,26 @@ def override(text):
     return name, setting_value(kinds, name, value)
 
 
+def room(text):
+    """--room: a shipped map's name ('ebrl rooms'), random:WxH:SEED or a map file, read
+    and checked here (models.rooms.MapError: one line naming the file); the paper's
+    `sutton` is None."""
+    from models import rooms
+    try:
+        rooms.load(text)
+    except rooms.MapError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+    return None if text == rooms.DEFAULT else text
+
+
+def add_room(parser):
+    from models import rooms
+    parser.add_argument("--room", type=room, default=None, metavar="NAME|FILE",
+                        help=f"the room: a shipped map ({', '.join(rooms.MAPS)}; 'ebrl rooms'), "
+                             "random:WxH:SEED (a labmaze maze of W x H cells) or a map file "
+                             f"(docs/rooms.md); default: {rooms.DEFAULT}, the paper's")
+
+
 def add_workers(parser):
     parser.add_argument("--workers", type=up_to(validate.MAX_WORKERS),
                         default=os.cpu_count() or 1)

@@ -12,6 +12,7 @@ def add_parser(subparsers):
                    help="random actions of the fuzz (default: %(default)s)")
     p.add_argument("--accuracy-actions", type=arguments.up_to(validate.MAX_STEPS), default=1000,
                    help="free-space actions of the accuracy check (default: %(default)s)")
+    arguments.add_room(p)
     p.set_defaults(func=run)
 
 
@@ -21,4 +22,5 @@ def run(args):
     except ValueError as e:
         return fail(str(e))
     from experiments.checks import robotcheck
-    return robotcheck.main(args.robot, args.actions, args.accuracy_actions, args.drive)
+    return robotcheck.main(args.robot, args.actions, args.accuracy_actions, args.drive,
+                           args.room)

@@ -24,13 +24,30 @@ def selected_robots(args):
 
 def check_robots(args):
     """Registered robots are known; a robot file is loaded once here, so a missing part
-    (the naming contract, docs/adding_a_robot.md) is one line before any run."""
+    (the naming contract, docs/adding_a_robot.md) is one line before any run; in a room
+    other than the paper's (--room), every robot is composed into it, so a corridor
+    narrower than a robot is one line too (models.rooms.check_fits)."""
     from tasks.robots import ROBOTS, resolve
+    room = getattr(args, "room", None)
     for robot in selected_robots(args):
         resolve(robot, args.drive)
         if robot not in ROBOTS:
             import tasks
-            tasks.load(robot, drive=args.drive).close()
+            tasks.load(robot, drive=args.drive, room=room).close()
+        else:
+            check_room((robot,), room)
+
+
+def check_room(robots, room, drive=None):
+    """Each robot composed into the room (--room; None: the paper's, nothing to check):
+    models.rooms.MapError, one line, when a corridor is narrower than a robot."""
+    if room is None:
+        return
+    import tasks
+    from tasks.robots import resolve
+    for robot in robots:
+        entry = resolve(robot, drive)
+        tasks.compile_robot(entry, entry.task_config(), room)
 
 
 def check_agent(args, overrides):
@@ -89,7 +106,8 @@ def plan(args, overrides=()):
     return runner.plan(selected_robots(args), conditions, args.seeds, args.steps, overrides,
                        args.drive, getattr(args, "agent", "ebrl"),
                        getattr(args, "first_trial", False),
-                       getattr(args, "protocol", "adopted"))
+                       readings=getattr(args, "protocol", "adopted"),
+                       room=getattr(args, "room", None))
 
 
 def report_if_any(folder, ran):

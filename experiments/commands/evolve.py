@@ -11,6 +11,7 @@ def add_parser(subparsers):
     p = subparsers.add_parser("evolve", help="CMA-ES over a robot's intrinsic behaviour, "
                                              "learning or not (an Optuna study; resumable)")
     arguments.add_robots(p, None, several=False)
+    arguments.add_room(p)
     p.add_argument("--population", type=arguments.up_to(validate.MAX_POPULATION), default=8,
                    help="trials per CMA-ES generation (default: %(default)s)")
     p.add_argument("--generations", type=arguments.up_to(validate.MAX_TRIALS), default=30,
@@ -60,7 +61,7 @@ def _check(args):
     url = study_storage(args)
     problem = evolve.Problem(args.robot, start, names, tuple(args.seeds), args.steps,
                              learning=not args.no_learning, population=args.population,
-                             sampler_seed=args.sampler_seed, drive=args.drive)
+                             sampler_seed=args.sampler_seed, drive=args.drive, room=args.room)
     return problem, url
 
 
@@ -86,7 +87,7 @@ def run(args):
         return fail(str(e))
     from experiments.running import protocol, results
     from experiments.studies import evolve, study
-    label = protocol.RunSpec(args.robot, "avoidance", 0, 1, drive=args.drive).label
+    label = protocol.RunSpec(args.robot, "avoidance", 0, 1, drive=args.drive, room=args.room).label
     name = args.study or evolve.study_name(label, not args.no_learning)
     args.out.mkdir(parents=True, exist_ok=True)
     try:

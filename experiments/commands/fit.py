@@ -5,7 +5,7 @@ import pathlib
 
 from experiments.checks import validate
 from experiments.commands import arguments
-from experiments.commands.common import fail, finish, study_storage
+from experiments.commands.common import check_room, fail, finish, study_storage
 
 
 def add_parser(subparsers):
@@ -39,6 +39,7 @@ def add_parser(subparsers):
                    help="an Optuna storage URL (postgresql://..., mysql://...) or an SQLite "
                         "file (default: OUT/study.db)")
     p.add_argument("--study", default=None, help="the study's name (default: fit)")
+    arguments.add_room(p)
     arguments.add_sampler_seed(p)
     p.add_argument("--validate", type=arguments.seeds, default=None, metavar="SEEDS",
                    help="then run the best trial (or --trial) and the defaults on these "
@@ -59,6 +60,7 @@ def _check(args):
     """Every argument checked before any work: (space names, storage URL); for --stage
     first-trial, ((space names, rungs), storage URL)."""
     from experiments.studies import fit
+    check_room(fit.ROBOTS if args.robot is None else (args.robot,), args.room)
     if args.stage == "first-trial":
         from experiments.studies import first_trials
         names, rungs = first_trials.check_args(args.robot, args.space, args.seeds,
@@ -122,6 +124,13 @@ def _search(args, s, problem, names):
     return outcome, path, failed
 
 
+def _in_room(name, room):
+    """A study's default name: with "@<room>" in a room other than the paper's."""
+    from experiments.running.protocol import ROOM_MARK
+    from models.rooms import tag
+    return name if room is None else f"{name}{ROOM_MARK}{tag(room)}"
+
+
 def run(args):
     try:
         names, url = _check(args)
@@ -133,10 +142,11 @@ def run(args):
     from experiments.studies import fit, study
     rungs = (tuple(args.seeds),) if args.seeds == args.promote_seeds else \
         (tuple(args.seeds), tuple(args.promote_seeds))
-    problem = fit.Problem(names=names, rungs=rungs, steps=args.steps)
+    problem = fit.Problem(names=names, rungs=rungs, steps=args.steps, room=args.room)
     args.out.mkdir(parents=True, exist_ok=True)
     try:
-        s = study.load(args.study or fit.STUDY_NAME, url, args.out, args.sampler_seed,
+        s = study.load(args.study or _in_room(fit.STUDY_NAME, args.room), url, args.out,
+                       args.sampler_seed,
                        first={n: fit.default(n) for n in names})  # the defaults: trial 0
     except Exception as e:  # a storage that cannot be opened: one line
         return fail(study.hide(f"cannot open the study storage {url}: {results.error_line(e)}",
@@ -153,9 +163,9 @@ def _first_trial(args, names, rungs, url):
     """`ebrl fit --stage first-trial` after its checks (experiments.studies.first_trials)."""
     from experiments.running import results
     from experiments.studies import first_trials, study
-    problem = first_trials.Problem(args.robot, names, rungs, args.steps)
+    problem = first_trials.Problem(args.robot, names, rungs, args.steps, room=args.room)
     args.out.mkdir(parents=True, exist_ok=True)
-    name = args.study or f"first_trial_{args.robot}"
+    name = args.study or _in_room(f"first_trial_{args.robot}", args.room)
     try:
         s = study.load(name, url, args.out, args.sampler_seed, first=problem.defaults())
     except Exception as e:  # a storage that cannot be opened: one line

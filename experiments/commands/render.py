@@ -33,6 +33,7 @@ def add_parser(subparsers):
     from experiments.outputs.rendering import PATH_STYLES
     p = subparsers.add_parser("render", help="an offscreen MP4 of one run, or of two side by side")
     arguments.add_robots(p, None, several=False)
+    arguments.add_room(p)
     p.add_argument("--camera", default="top",
                    help="top (default), perspective, follow (a perspective camera that "
                         "tracks the robot), or a camera of the robot's file (chase)")
@@ -99,7 +100,8 @@ def _specs(args, variants, genome):
     paper_first = args.compare is not None and args.compare[0] == "behaviour"
     return [protocol.RunSpec(args.robot, condition, args.seed, args.steps, tuple(sorted(pairs)),
                              drive=args.drive,
-                             behaviour=None if paper_first and i == 0 else genome)
+                             behaviour=None if paper_first and i == 0 else genome,
+                             room=args.room)
             for i, (_, condition, pairs) in enumerate(variants)]
 
 

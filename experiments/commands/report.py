@@ -13,6 +13,11 @@ def add_parser(subparsers):
                    help="also regenerate the tables of this page (between its markers), "
                         "copy the figures to --figures and summary.json beside it")
     p.add_argument("--figures", type=pathlib.Path, default=pathlib.Path("docs/figures"))
+    from experiments.commands import arguments
+    from models import rooms
+    p.add_argument("--room", type=arguments.room, default=False, metavar="NAME|FILE",
+                   help="only the runs in this room (default: every room's runs, each "
+                        f"robot's rows in its own room; {rooms.DEFAULT}: the paper's)")
     p.set_defaults(func=run)
 
 
@@ -32,7 +37,7 @@ def run(args):
     from experiments.outputs import report
     from experiments.running import results
     try:
-        path = report.build(args.dir)
+        path = report.build(args.dir, args.room)
         if args.results is not None:
             print(f"published: {report.publish(args.dir, args.results, args.figures)}")
         failed = results.failed_runs(args.dir)

@@ -13,6 +13,7 @@ def add_parser(subparsers):
     from experiments.running.protocol import AGENTS
     p = subparsers.add_parser("run", help="run the protocol (skips runs already on disk)")
     arguments.add_robots(p, "paper")
+    arguments.add_room(p)
     p.add_argument("--condition", type=arguments.choice(paper.CONDITIONS + ("all",)),
                    default="all")
     p.add_argument("--seeds", type=arguments.seeds, default=list(range(paper.SEEDS)),

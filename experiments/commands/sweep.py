@@ -19,6 +19,7 @@ def add_parser(subparsers):
     p.add_argument("--values", default="0,0.01,0.05,0.1,0.2",
                    help="comma-separated values (default: %(default)s)")
     arguments.add_robots(p, "paper")
+    arguments.add_room(p)
     p.add_argument("--condition", type=arguments.choice(paper.CONDITIONS + ("all",)),
                    default="all")
     p.add_argument("--seeds", type=arguments.seeds, default=list(range(20)))

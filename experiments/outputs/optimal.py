@@ -57,18 +57,60 @@ def segment_box_distance(p, q, box):
     return min([point_box(p), point_box(q)] + [point_segment(c) for c in corners])
 
 
+def segment_box_distances(p, qs, boxes):
+    """segment_box_distance of the segments p -> each of qs (m, 2) and each box (k, 4):
+    an (m, k) array, for many segments at once (the paths of a maze's many walls)."""
+    p = np.asarray(p, dtype=float)
+    qs = np.asarray(qs, dtype=float).reshape(-1, 2)[:, None, :]   # (m, 1, 2)
+    b = np.asarray(boxes, dtype=float).reshape(-1, 4)[None]        # (1, k, 4)
+    x0, x1, y0, y1 = b[..., 0], b[..., 1], b[..., 2], b[..., 3]
+    d = qs - p                                                     # (m, 1, 2)
+    dx, dy = d[..., 0], d[..., 1]
+    t0 = np.zeros(np.broadcast_shapes(dx.shape, x0.shape))
+    t1 = np.ones_like(t0)
+    outside = np.zeros(t0.shape, bool)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for pk, qk in ((-dx, p[0] - x0), (dx, x1 - p[0]), (-dy, p[1] - y0), (dy, y1 - p[1])):
+            pk, qk = np.broadcast_to(pk, t0.shape), np.broadcast_to(qk, t0.shape)
+            flat = np.abs(pk) < 1e-12
+            outside |= flat & (qk < 0)
+            t = qk / pk
+            t0 = np.where(~flat & (pk < 0), np.maximum(t0, t), t0)
+            t1 = np.where(~flat & (pk > 0), np.minimum(t1, t), t1)
+    crossing = ~outside & (t0 <= t1)
+
+    def point_box(x, y):
+        return np.hypot(np.maximum(np.maximum(x0 - x, 0.0), x - x1),
+                        np.maximum(np.maximum(y0 - y, 0.0), y - y1))
+
+    best = np.minimum(point_box(p[0], p[1]), point_box(qs[..., 0], qs[..., 1]))
+    length2 = dx * dx + dy * dy
+    for cx, cy in ((x0, y0), (x0, y1), (x1, y0), (x1, y1)):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = np.where(length2 == 0, 0.0, ((cx - p[0]) * dx + (cy - p[1]) * dy) / length2)
+        t = np.clip(t, 0.0, 1.0)
+        best = np.minimum(best, np.hypot(p[0] + t * dx - cx, p[1] + t * dy - cy))
+    return np.where(crossing, 0.0, best)
+
+
 def shortest_path(start, field, obstacles, goal, radius):
     """(length, points) of the shortest path of a disc of `radius` from start into goal."""
     fx0, fx1, fy0, fy1 = field[0] + radius, field[1] - radius, field[2] + radius, field[3] - radius
     eps = 1e-6
     start = np.asarray(start, dtype=float)
+    boxes = np.asarray(obstacles, dtype=float).reshape(-1, 4)
+
+    def free_many(p, qs):
+        """free(p, q) for each q of qs."""
+        qs = np.asarray(qs, dtype=float).reshape(-1, 2)
+        ok = ((np.minimum(p[0], qs[:, 0]) >= fx0 - eps) & (np.maximum(p[0], qs[:, 0]) <= fx1 + eps)
+              & (np.minimum(p[1], qs[:, 1]) >= fy0 - eps) & (np.maximum(p[1], qs[:, 1]) <= fy1 + eps))
+        if len(boxes) and ok.any():
+            ok[ok] = (segment_box_distances(p, qs[ok], boxes) >= radius - 1e-4).all(axis=1)
+        return ok
 
     def free(p, q):
-        if min(p[0], q[0]) < fx0 - eps or max(p[0], q[0]) > fx1 + eps:
-            return False
-        if min(p[1], q[1]) < fy0 - eps or max(p[1], q[1]) > fy1 + eps:
-            return False
-        return all(segment_box_distance(p, q, b) >= radius - 1e-4 for b in obstacles)
+        return bool(free_many(p, [q])[0])
 
     nodes = [start]
     for x0, x1, y0, y1 in obstacles:
@@ -80,6 +122,9 @@ def shortest_path(start, field, obstacles, goal, radius):
                 pt = np.array([cx + r * math.cos(a), cy + r * math.sin(a)])
                 if fx0 <= pt[0] <= fx1 and fy0 <= pt[1] <= fy1:
                     nodes.append(pt)
+    # Points no path can touch (inside another wall's inflated box) are left out.
+    nodes = [nodes[0]] + [pt for pt in nodes[1:] if free(pt, pt)]
+    points = np.array(nodes)
     gx0, gx1, gy0, gy1 = goal[0], min(goal[1], fx1), goal[2], min(goal[3], fy1)
 
     def to_goal(p):
@@ -99,13 +144,14 @@ def shortest_path(start, field, obstacles, goal, radius):
         q = to_goal(nodes[i])
         if q is not None and d + np.linalg.norm(q - nodes[i]) < best:
             best, best_end = d + float(np.linalg.norm(q - nodes[i])), (i, q)
-        for j, pt in enumerate(nodes):
-            if j in done or j == i:
-                continue
-            nd = d + float(np.linalg.norm(pt - nodes[i]))
-            if nd < dist.get(j, math.inf) and free(nodes[i], pt):
-                dist[j], prev[j] = nd, i
-                heapq.heappush(heap, (nd, j))
+        nd = d + np.linalg.norm(points - nodes[i], axis=1)
+        known = np.array([dist.get(j, math.inf) for j in range(len(nodes))])
+        candidates = [j for j in np.flatnonzero(nd < known) if j not in done and j != i]
+        if not candidates:
+            continue
+        for j in np.asarray(candidates)[free_many(nodes[i], points[candidates])]:
+            dist[int(j)], prev[int(j)] = float(nd[j]), i
+            heapq.heappush(heap, (float(nd[j]), int(j)))
     i, q = best_end
     path = [q]
     while True:
@@ -160,17 +206,17 @@ def floating_lower_bound(length, max_acceleration=0.2):
     return int(math.ceil((-1 + math.sqrt(1 + 8 * length / a)) / 2 - 1e-9))
 
 
-def optimal(robot, drive=None):
+def optimal(robot, drive=None, room=None):
     """{'length', 'steps', 'steps_lower', 'path'} for robot (a registered name, or a file
     with its drive) from the room's nominal start, in paper units; steps is the feasible
-    plan, steps_lower a bound no trial can beat."""
+    plan, steps_lower a bound no trial can beat. room: models.rooms' (None: the paper's)."""
     import models
     import tasks
     from tasks import navigation
     entry = tasks.resolve(robot, drive)
     # the compiled room alone (as tasks.load compiles it, with the robot's readings): no
     # environment, so a report loads none of the drive's compiled kernels
-    model, _ = tasks.compile_robot(entry, entry.task_config())
+    model, _ = tasks.compile_robot(entry, entry.task_config(), room)
     field, obstacles, goal, start = models.room_layout(model)
     radius = navigation.robot_radius(model)
     length, path = shortest_path(start[:2], field, obstacles, goal, radius)
@@ -188,7 +234,7 @@ def yardstick(runs, root=None):
     for robot, condition in sorted({(r, c) for r, c, _ in runs}):
         p = next(run["parameters"] for (r, _, _), run in runs.items() if r == robot)
         file = p.get("robot_file")
-        key = (file or p.get("robot_name", robot), p["drive"] if file else None)
+        key = (file or p.get("robot_name", robot), p["drive"] if file else None, p.get("room"))
         if key not in cache:  # one per robot, whichever learners ran it
             cache[key] = optimal(*key)
         best = cache[key]

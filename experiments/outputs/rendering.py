@@ -116,7 +116,7 @@ def camera_names(physics):
 def check_camera(spec, camera):
     """RenderingError unless the run's room and robot have `camera`."""
     import tasks
-    env = tasks.load(spec.entry, seed=0)
+    env = tasks.load(spec.entry, seed=0, room=spec.room)
     try:
         names = camera_names(env.physics)
     finally:

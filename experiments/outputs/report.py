@@ -11,14 +11,28 @@ from experiments.running import results
 from tasks.robots import DRIVES
 
 @functools.cache
-def _room_layout():
+def _room_layout(room=None):
     import models
-    return models.room_layout(models.room_model())
+    return models.room_layout(models.room_model(room))
 
 
-def draw_room(ax):
+def paper_figures(group, condition=None):
+    """Section 3.6's figures for a summary group's drive and condition; None in a room
+    other than the paper's (the paper ran its own room only)."""
+    if group.get("room"):
+        return None
+    return paper.RESULTS.get((group.get("drive"), condition or group["condition"]))
+
+
+def room_of(runs, robot):
+    """The room (run parameters' "room"; None: the paper's) of a robot label's runs."""
+    return next(run["parameters"].get("room") for (r, _, _), run in runs.items() if r == robot)
+
+
+def draw_room(ax, room=None):
+    """The room's map (models.rooms) in paper units: the field, the walls, the goal."""
     from matplotlib.patches import Rectangle
-    field, obstacles, goal, _ = _room_layout()
+    field, obstacles, goal, _ = _room_layout(room)
     ax.add_patch(Rectangle((field[0], field[2]), field[1] - field[0], field[3] - field[2],
                            fill=False, lw=2, ec="0.2"))
     for x0, x1, y0, y1 in obstacles:
@@ -46,7 +60,7 @@ def comparison_rows(summary):
     """One row per (group, figure): paper, ours, 95% CI, ratio, paper inside the CI."""
     rows = []
     for g in summary["groups"]:
-        ref = paper.RESULTS.get((g.get("drive"), g["condition"]))
+        ref = paper_figures(g)
         for key, label, digits in (("first_trial_steps", "first-trial steps", 0),
                                    ("steps_per_trial", "steps per trial", 0),
                                    ("shrink", "shrink (per trial / first)", 2)):
@@ -98,7 +112,7 @@ def claims(summary):
     out = []
     for robot in dict.fromkeys(g["robot"] for g in summary["groups"]):
         r, a = by.get((robot, "random")), by.get((robot, "avoidance"))
-        if not (r and a) or (r.get("drive"), "random") not in paper.RESULTS:
+        if not (r and a) or paper_figures(r, "random") is None:
             continue
         ref = {c: paper.RESULTS[(r["drive"], c)] for c in paper.CONDITIONS}
         factor = ref["random"]["first_trial_steps"]["mean"] / ref["avoidance"]["first_trial_steps"]["mean"]
@@ -214,7 +228,7 @@ def traces_figure(root, runs, robot, path):
     plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(11, 3.9))
     for ax, condition in zip(axes, paper.CONDITIONS):
-        draw_room(ax)
+        draw_room(ax, room_of(runs, robot))
         seed = typical_seed(runs, robot, condition)
         if seed is None:
             ax.set_title(f"{condition}: no seed with two goals")
@@ -250,8 +264,7 @@ def first_vs_learned_figure(summary, path):
         err = np.array([[m - (g[key]["ci95"] or [m, m])[0], (g[key]["ci95"] or [m, m])[1] - m]
                         for m, g in zip(means, groups)]).T
         ax.bar(x + off, means, 0.34, color=colour, label=f"ours: {label}", yerr=err, capsize=3)
-        ref = [paper.RESULTS.get((g.get("drive"), g["condition"]), {}).get(key, {}).get("mean")
-               for g in groups]
+        ref = [(paper_figures(g) or {}).get(key, {}).get("mean") for g in groups]
         ax.plot(x + off, [np.nan if v is None else v for v in ref], "k_", ms=18, mew=2,
                 label=f"paper: {label}" if off < 0 else None)
     ax.plot([], [], "k_", ms=18, mew=2, label="paper: steps per trial")
@@ -311,10 +324,12 @@ def optimal_table(rows):
     return optimal.table(rows)
 
 
-def build(root):
-    """Rebuilds summary.json, REPORT.md and the figures under root; returns REPORT.md's path."""
+def build(root, room=False):
+    """Rebuilds summary.json, REPORT.md and the figures under root; returns REPORT.md's
+    path. room: only that room's runs (None: the paper's; False: every room's, each
+    robot label's runs in its own room, models.rooms)."""
     root = pathlib.Path(root)
-    runs = results.load_runs(root)
+    runs = results.load_runs(root, room=room)
     failed = results.failed_runs(root)  # named below, never averaged
     summary = results.summarize(runs)
     if failed:

@@ -32,6 +32,8 @@ PROTOCOL_VERSION = 6
 TRACE_SCALE = 100.0
 #: The end of a first-trial run's label (RunSpec.first_trial): "two_wheel.first_trial".
 FIRST_TRIAL = ".first_trial"
+#: Between a label and its room's name (models.rooms.tag): "two_wheel@random-21x21-3".
+ROOM_MARK = "@"
 
 
 @dataclasses.dataclass(frozen=True)
@@ -56,6 +58,18 @@ class RunSpec:
     #: A named protocol of tasks.robots.PROTOCOLS: "adopted" (the registry's readings) or
     #: "literal" (the paper as written, tasks.robots.LITERAL).
     protocol: str = "adopted"
+    #: The room (models.rooms: a shipped map's name, random:WxH:SEED or a map file); None:
+    #: the paper's `sutton` (so named, it is made None). A run in another room has
+    #: "@<room>" after its label, so runs in different rooms never share a folder.
+    room: str | None = None
+
+    def __post_init__(self):
+        if self.room is not None:
+            from models.rooms import DEFAULT
+            if str(self.room) == DEFAULT:
+                object.__setattr__(self, "room", None)
+            else:
+                object.__setattr__(self, "room", str(self.room))
 
     @property
     def entry(self) -> Robot:
@@ -67,11 +81,16 @@ class RunSpec:
     def label(self) -> str:
         """The robot's name in folders and tables: its registered name, or its file's stem;
         with ".<agent>" after it for a learner other than EBRL, and FIRST_TRIAL after
-        that for a first-trial run."""
+        that for a first-trial run; "@<room>" (models.rooms.tag) last, in a room other
+        than the paper's."""
         name = (self.robot if self.drive is None and not self.robot.endswith(".toml")
                 else pathlib.Path(self.robot).stem)
         name = name if self.agent == "ebrl" else f"{name}.{self.agent}"
-        return name + FIRST_TRIAL if self.first_trial else name
+        name = name + FIRST_TRIAL if self.first_trial else name
+        if self.room is None:
+            return name
+        from models.rooms import tag
+        return f"{name}{ROOM_MARK}{tag(self.room)}"
 
     @property
     def name(self) -> str:
@@ -116,10 +135,11 @@ class RunSpec:
             "avoidance": entry.avoidance,
             "modalities": [list(m) for m in entry.modalities],
             "task": dataclasses.asdict(task),
-            "model_sha256": model_digest(entry, task),
+            "model_sha256": model_digest(entry, task, self.room),
         } | ({} if self.behaviour is None else {"behaviour": _genome_dict(self.behaviour)}) \
           | ({"first_trial": True} if self.first_trial else {}) \
-          | ({} if self.protocol == "adopted" else {"protocol": self.protocol})
+          | ({} if self.protocol == "adopted" else {"protocol": self.protocol}) \
+          | ({} if self.room is None else {"room": self.room})
 
 
 def _genome_dict(genome):
@@ -128,14 +148,14 @@ def _genome_dict(genome):
 
 
 @functools.cache
-def model_digest(entry, task_config):
+def model_digest(entry, task_config, room=None):
     """A digest of the composed MJCF with the entry's options and the task config's edits,
     so results made with another model never match. Computed once per process and model
     (composing takes milliseconds, and every spec asks)."""
     import hashlib
 
     import tasks
-    _, spec = tasks.compile_robot(entry, task_config)
+    _, spec = tasks.compile_robot(entry, task_config, room)
     return hashlib.sha256(spec.to_xml().encode()).hexdigest()[:16]
 
 
@@ -311,7 +331,7 @@ def execute(spec, on_step=None, fused=True):
     from tasks.kernels.bindings import stage_timers_off
 
     env_seed, _ = seeds_for(spec.seed)
-    env = tasks.load(spec.entry, seed=env_seed, config=spec.task_config())
+    env = tasks.load(spec.entry, seed=env_seed, config=spec.task_config(), room=spec.room)
     agent = make_agent(spec, env)
     keys = tuple(key for key, _ in spec.entry.modalities)
     started = time.perf_counter()

@@ -320,10 +320,12 @@ def existing(root, spec):
     return "done"
 
 
-def load_runs(root, specs=None):
+def load_runs(root, specs=None, room=False):
     """Every complete run under root (or only those of specs), as
     (robot, condition, seed) -> run.json dict. Failed runs are left out (see
-    failed_runs)."""
+    failed_runs). room: only the runs in that room (None: the paper's; False: all). A
+    run's robot (its label) names its room, so runs in different rooms never share a key
+    (protocol.RunSpec.label)."""
     root = pathlib.Path(root)
     if not root.is_dir():
         raise ResultsError(f"no results folder at {root}")
@@ -336,9 +338,12 @@ def load_runs(root, specs=None):
             failed.append(run["error"])
             continue
         p = run["parameters"]
+        if room is not False and p.get("room") != room:
+            continue
         runs[(p["robot"], p["condition"], p["seed"])] = run
     if not runs:
         raise ResultsError(f"no complete runs under {root}"
+                           + ("" if room is False else f" in room {room or 'sutton'}")
                            + (f" ({len(failed)} failed: {advice(failed, 'rerun `ebrl run`')})"
                               if failed else ""))
     return runs
@@ -426,8 +431,9 @@ def summarize(runs):
             idx = rng.integers(0, len(pairs), size=(BOOTSTRAP_SAMPLES, len(pairs)))
             ratios = pairs[idx, 1].mean(axis=1) / pairs[idx, 0].mean(axis=1)
             shrink_ci = [float(x) for x in np.percentile(ratios, [2.5, 97.5])]
+        room = runs[(robot, condition, seeds[0])]["parameters"].get("room")
         groups.append({
-            "robot": robot, "condition": condition,
+            "robot": robot, "condition": condition, **({"room": room} if room else {}),
             "drive": runs[(robot, condition, seeds[0])]["parameters"].get("drive"),
             "agent": runs[(robot, condition, seeds[0])]["parameters"].get("learner", "ebrl"),
             "steps": steps[0] if len(steps) == 1 else steps,

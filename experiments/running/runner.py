@@ -49,13 +49,13 @@ Ran = collections.namedtuple("Ran", "made on_disk failed")
 
 
 def plan(robots, conditions, seeds, steps=None, overrides=(), drive=None, agent="ebrl",
-         first_trial=False, readings="adopted"):
+         first_trial=False, readings="adopted", room=None):
     """Specs in the order to start them: the longest first, for an even finish.
 
     steps: None for each robot's budget (the registry's), a number for all, or a dict
     by robot; drive: for robots given as files; first_trial: runs that end at their
     first goal (protocol.RunSpec.first_trial); readings: a named protocol
-    (tasks.robots.PROTOCOLS: RunSpec.protocol)."""
+    (tasks.robots.PROTOCOLS: RunSpec.protocol); room: the room (protocol.RunSpec.room)."""
     from tasks.robots import resolve
 
     def budget(robot):
@@ -64,7 +64,8 @@ def plan(robots, conditions, seeds, steps=None, overrides=(), drive=None, agent=
         return steps if steps is not None else resolve(robot, drive).budget
 
     specs = [protocol.RunSpec(r, c, s, budget(r), tuple(sorted(dict(overrides).items())),
-                              drive, agent, first_trial=first_trial, protocol=readings)
+                              drive, agent, first_trial=first_trial, protocol=readings,
+                              room=room)
              for r in robots for c in conditions for s in seeds]
     return sorted(specs, key=lambda s: -s.steps)
 

@@ -98,11 +98,12 @@ def _concerns(changes, robot, condition):
                for name, _ in changes if name in BY_NAME)
 
 
-def plan(robots, seeds, steps, readings, combos):
-    """{folder name: specs} for every cell, each cell only where its readings apply."""
+def plan(robots, seeds, steps, readings, combos, room=None):
+    """{folder name: specs} for every cell, each cell only where its readings apply; in
+    room (protocol.RunSpec.room)."""
     out = {}
     for name, changes in cells(readings, combos):
-        specs = [s for s in runner.plan(robots, paper.CONDITIONS, seeds, steps, changes)
+        specs = [s for s in runner.plan(robots, paper.CONDITIONS, seeds, steps, changes, room=room)
                  if _concerns(changes, s.robot, s.condition) and not _is_default(changes, s.robot)]
         if specs:
             out[name] = specs
@@ -110,12 +111,12 @@ def plan(robots, seeds, steps, readings, combos):
 
 
 def run(out, robots, seeds, steps, readings, combos, baseline=None, workers=None,
-        progress=True):
+        progress=True, room=None):
     """Runs the matrix under out (the defaults' cell from baseline when given); returns
     {cell: runs} of the complete runs and the failed (name, error) pairs."""
     out = pathlib.Path(out)
-    plans = plan(robots, seeds, steps, readings, combos)
-    default_specs = runner.plan(robots, paper.CONDITIONS, seeds, steps)
+    plans = plan(robots, seeds, steps, readings, combos, room)
+    default_specs = runner.plan(robots, paper.CONDITIONS, seeds, steps, room=room)
     if baseline is not None:
         if runner.pending(baseline, default_specs):
             raise results.ResultsError(f"{baseline} lacks some of the default runs for these "

@@ -151,6 +151,7 @@ class Problem:
     population: int = 8
     sampler_seed: int = 0
     drive: str = None
+    room: str = None               # models.rooms' room; None: the paper's
 
     @property
     def rungs(self):
@@ -181,7 +182,7 @@ class Problem:
         overrides = () if self.learning else NO_LEARNING
         return [dataclasses.replace(s, behaviour=genome) for s in
                 runner.plan((self.robot,), (CONDITION,), seeds, self.steps, overrides,
-                            self.drive)]
+                            self.drive, room=self.room)]
 
     def score(self, params, runs):
         ms = [runs[k]["metrics"] for k in sorted(runs)]
@@ -199,7 +200,7 @@ class Problem:
         return {"robot": self.robot, "drive": self.drive, "start": genomes.to_dict(self.start),
                 "space": list(self.names), "seeds": list(self.seeds), "steps": self.steps,
                 "learning": self.learning, "population": self.population,
-                "sampler_seed": self.sampler_seed}
+                "sampler_seed": self.sampler_seed} | ({} if self.room is None else {"room": self.room})
 
     def sampler(self, n_trials):
         """CMA-ES for the batch starting at trial n_trials, seeded from the sampler seed

@@ -166,6 +166,7 @@ class Problem:
     names: tuple = None
     rungs: tuple = (tuple(range(MIN_SEEDS)),)
     steps: int = None  # None: the drive's budget (the paper's tail is "within 30,000")
+    room: str = None  # models.rooms' room; None: the paper's
 
     def __post_init__(self):
         if self.names is None:
@@ -182,7 +183,7 @@ class Problem:
 
     def specs(self, params, seeds):
         return runner.plan((self.robot,), paper.CONDITIONS, seeds, self.steps,
-                           overrides(params, self.robot), first_trial=True)
+                           overrides(params, self.robot), first_trial=True, room=self.room)
 
     def samples(self, runs):
         """{condition: sample} of runs (robot, condition, seed) -> run.json."""

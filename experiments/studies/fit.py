@@ -127,6 +127,7 @@ class Problem:
     names: tuple = tuple(BY_NAME)
     rungs: tuple = ((0, 1), tuple(range(6)))
     steps: int = None  # None: each robot's budget
+    room: str = None  # models.rooms' room; None: the paper's
 
     def distributions(self):
         return {n: BY_NAME[n].distribution() for n in self.names}
@@ -136,7 +137,7 @@ class Problem:
         out = []
         for robot in ROBOTS:
             out += runner.plan((robot,), paper.CONDITIONS, seeds, self.steps,
-                               overrides(params, robot))
+                               overrides(params, robot), room=self.room)
         return out
 
     def score(self, params, runs):

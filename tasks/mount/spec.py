@@ -233,10 +233,8 @@ def _beams(mount, spec, base, beam_names):
 
 def _options(mount, spec):
     """The room's flags (unless the mount keeps the file's) and gravity."""
-    import mujoco
-
     import models
-    room = mujoco.MjSpec.from_file(str(models.ROOM_FILE))
+    room = models.room_spec()
     keep = set(mount.keep_options)
     if "flags" not in keep:
         spec.option.disableflags = room.option.disableflags
