@@ -347,20 +347,22 @@ def test_other_parameters_are_refused_not_overwritten(clean_run, tmp_path):
 
 
 def test_sweep_table_takes_the_default_rows_from_a_baseline_run(clean_run, tmp_path):
-    sweep = ["sweep", "--robot", "two_wheel", "--condition", "avoidance", "--values", "0.05",
+    sweep = ["sweep", "--robot", "two_wheel", "--condition", "avoidance", "--values", "0.4",
              "--steps", "400", "--out", tmp_path / "sweeps", "--baseline", clean_run, "--no-progress"]
     ebrl(*sweep, "--seeds", "0-1")
     table = (tmp_path / "sweeps" / "SWEEP.md").read_text()
     base = summary(clean_run)["groups"]
     goals = next(g for g in base if (g["robot"], g["condition"]) == ("two_wheel", "avoidance"))["goals"]
-    row = next(line for line in table.splitlines() if line.startswith("| 0.0 (default"))
+    from tasks.robots import LEARNER
+    default = f"| {dict(LEARNER)['policy_threshold']} (default"   # protocol 6's
+    row = next(line for line in table.splitlines() if line.startswith(default))
     assert row.endswith(f"| {goals['min']} / {goals['median']:.1f} |")
-    assert table.index("| 0.0 (default") < table.index("| 0.05 |")
+    assert table.index(default) < table.index("| 0.4 |")
     # Seeds the baseline lacks: refused in one line, before anything runs.
     proc = ebrl(*sweep, "--seeds", "0-2", check=False)
     assert proc.returncode != 0 and "lacks some of these runs" in proc.stderr
     assert "Traceback" not in proc.stderr
-    sweep = tmp_path / "sweeps" / "policy_threshold_0.05"
+    sweep = tmp_path / "sweeps" / "policy_threshold_0.4"
     assert not (sweep / "two_wheel" / "avoidance" / "seed_002").exists()
 
 

@@ -45,8 +45,9 @@ def test_a_stretch_is_the_step_by_step_loop(robot, steps, condition):
     """protocol.Trials step by step (Agent.act, Environment.step, Agent.learn) against
     the compiled stretches over the same functions, in stretches of at most 700 steps
     (a stretch also resumes where one stopped), run in two halves (a loop resumes)."""
-    # floating seed 45 reaches the goal early in both conditions (steps 325 and 991)
-    spec, ((env1, agent1), (env2, agent2)) = _pair(robot, condition, 45 if robot == "floating" else 0)
+    # floating seed 300 reaches the goal early in both conditions (protocol 6: steps 1,880
+    # and 905)
+    spec, ((env1, agent1), (env2, agent2)) = _pair(robot, condition, 300 if robot == "floating" else 0)
     keys = tuple(k for k, _ in spec.entry.modalities)
     one = protocol.Trials(env1, agent1, keys, steps, fused=False)
     two = protocol.Trials(env2, agent2, keys, steps, stretch=700)
@@ -66,7 +67,7 @@ def test_a_stretch_is_the_step_by_step_loop(robot, steps, condition):
 
 def test_runs_are_the_same_fused_or_not_and_reach_the_goal():
     for robot, condition, seed, steps in (("two_wheel", "avoidance", 1, 12_000),
-                                          ("floating", "random", 45, 8000)):
+                                          ("floating", "random", 300, 8000)):
         spec = protocol.RunSpec(robot, condition, seed, steps)
         a, b = protocol.execute(spec, fused=False), protocol.execute(spec)
         assert len(a["trial_ends"]) >= 3, (robot, condition)
