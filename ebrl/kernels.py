@@ -194,7 +194,7 @@ def oldest(time, size):
 
 
 @njit(cache=True)
-def forget(k, inputs, sums, nxt, prev, table, table_w, tail, referred, cut=False):
+def forget(k, inputs, sums, nxt, prev, table, table_w, tail, referred, cut):
     """Removes element k (2.1): its episode's neighbours are linked to each other (or,
     with cut, forgetting_link "cut", unlinked: the episode ends at k's predecessor and
     a new one starts at its successor), a recall entry pointing at it is dropped, its
@@ -304,10 +304,10 @@ def time_discount(rel, size, rate):
 def learn(x, action, reward, step, size, tail, referred, inputs, sums, variance, actions,
           utility, rel, time, nxt, prev, table, table_w, floor, initial_utility,
           initial_reliability, discount, cutoff, rho, decay, decided, eq7_scope, forgetting,
-          signal=np.nan, walk=EQ7_WHOLE, cut=False):
+          r7, walk, cut):
     """One learn: stores (x, action) as the episode's next element, in a free slot or,
     when the memory is full, in a forgotten element's; then eq 6 if reward != 0, eq 7
-    if its r (`signal`; NaN: the reward, eq7_signal "reward") != 0, then the time
+    if its r, r7 (eq7_signal's: the reward itself by default), != 0, then the time
     discount. Returns (size, tail, referred).
 
     forgetting (2.1): FORGET_LEAST_RELIABLE forgets the least reliable element,
@@ -343,12 +343,11 @@ def learn(x, action, reward, step, size, tail, referred, inputs, sums, variance,
     tail = slot
     if reward != 0.0:
         eq6(utility, prev, time, slot, reward, discount, cutoff)
-    r = reward if np.isnan(signal) else signal
-    if r != 0.0:
+    if r7 != 0.0:
         if eq7_scope == EQ7_DECIDED_ONLY:
-            eq7_decided(rel, decided, size, r, rho)
+            eq7_decided(rel, decided, size, r7, rho)
         elif referred >= 0:
-            eq7(rel, prev, referred, r, rho, time, discount, cutoff, walk)
+            eq7(rel, prev, referred, r7, rho, time, discount, cutoff, walk)
     time_discount(rel, size, decay)
     return size, tail, referred
 
@@ -435,12 +434,10 @@ def clip_unit(a):
 
 @njit(cache=True)
 def eq7_signal(s, reward):
-    """eq 7's r for the step just taken (learn's `signal`): NaN for eq7_signal "reward"
-    (the reward itself); else the reward less what the step's memory decision expected
+    """eq 7's r for the step just taken (learn's r7): the reward itself for eq7_signal
+    "reward"; else the reward less what the step's memory decision expected
     (s.expected), or the reward alone after a step the memory did not choose."""
-    if s.eq7_signal == EQ7_REWARD:
-        return np.nan
-    if s.decider == MEMORY:
+    if s.eq7_signal != EQ7_REWARD and s.decider == MEMORY:
         return reward - s.expected
     return reward
 
