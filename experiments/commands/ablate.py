@@ -23,8 +23,7 @@ def add_parser(subparsers):
     p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("ablation"))
     p.add_argument("--baseline", type=pathlib.Path, default=None,
                    help="a run folder (e.g. results) whose default runs are the default cell")
-    p.add_argument("--results", type=pathlib.Path, default=None, metavar="RESULTS.md",
-                   help="also regenerate this page's Ablation block")
+    arguments.add_results(p, "this page's Ablation block", figures=False)
     arguments.add_no_progress(p)
     p.set_defaults(func=run)
 
@@ -63,8 +62,7 @@ def _check(args):
     validate.output_folder(args.out, "--out")
     if args.baseline is not None:
         validate.results_folder(args.baseline, "--baseline")
-    if args.results is not None:
-        validate.output_file(args.results, "--results")
+    arguments.check_results(args)
     return readings, combos
 
 

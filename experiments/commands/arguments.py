@@ -1,10 +1,11 @@
 """The argument types and options several commands share: --robot and --drive from the
 registry, seeds, bounded integers, choices, --set NAME=VALUE, --workers, --backend,
---no-progress and --sampler-seed. A bad value is argparse's one-line error (exit status 2),
-the message from experiments.checks.validate.
+--no-progress, --sampler-seed, and --results with --figures. A bad value is argparse's
+one-line error (exit status 2), the message from experiments.checks.validate.
 """
 import argparse
 import os
+import pathlib
 import sys
 
 from experiments.checks import validate
@@ -147,3 +148,24 @@ def add_no_progress(parser):
 
 def add_sampler_seed(parser):
     parser.add_argument("--sampler-seed", type=between(0, 2**31 - 1), default=0)
+
+
+FIGURES = pathlib.Path("docs/figures")
+
+
+def add_results(parser, what, figures=True):
+    """--results RESULTS.md (also regenerate `what` on that page) and, with figures,
+    --figures (where the page's figures are copied; default docs/figures)."""
+    parser.add_argument("--results", type=pathlib.Path, default=None, metavar="RESULTS.md",
+                        help=f"also regenerate {what}")
+    if figures:
+        parser.add_argument("--figures", type=pathlib.Path, default=FIGURES,
+                            help="where the page's figures go (default: %(default)s)")
+
+
+def check_results(args):
+    """add_results' options writable, before any work starts (ValueError otherwise)."""
+    if args.results is not None:
+        validate.output_file(args.results, "--results")
+        if hasattr(args, "figures"):
+            validate.output_folder(args.figures, "--figures")

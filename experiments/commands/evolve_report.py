@@ -3,6 +3,7 @@ ones (experiments.studies.evolved)."""
 import pathlib
 
 from experiments.checks import validate
+from experiments.commands import arguments
 from experiments.commands.common import fail
 
 
@@ -17,9 +18,7 @@ def add_parser(subparsers):
                    help="the evolved genomes' runs: learner/, controller/, alone_*/, "
                         "transfer/ (default: %(default)s)")
     p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("EVOLVE.md"))
-    p.add_argument("--figures", type=pathlib.Path, default=pathlib.Path("docs/figures"))
-    p.add_argument("--results", type=pathlib.Path, default=None, metavar="RESULTS.md",
-                   help="also regenerate this page's 'Evolved intrinsic behaviours' block")
+    arguments.add_results(p, "this page's 'Evolved intrinsic behaviours' block")
     p.set_defaults(func=run)
 
 
@@ -30,8 +29,7 @@ def _check(args):
             raise ValueError(f"{what}: no folder at {folder}")
     validate.output_file(args.out, "--out")
     validate.output_folder(args.figures, "--figures")
-    if args.results is not None:
-        validate.output_file(args.results, "--results")
+    arguments.check_results(args)
 
 
 def run(args):

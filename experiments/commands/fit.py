@@ -49,9 +49,7 @@ def add_parser(subparsers):
     arguments.add_workers(p)
     arguments.add_backend(p)
     p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("fit"))
-    p.add_argument("--results", type=pathlib.Path, default=None, metavar="RESULTS.md",
-                   help="also regenerate this page's Search block")
-    p.add_argument("--figures", type=pathlib.Path, default=pathlib.Path("docs/figures"))
+    arguments.add_results(p, "this page's Search block")
     arguments.add_no_progress(p)
     p.set_defaults(func=run)
 
@@ -85,9 +83,7 @@ def _check(args):
                          "--seeds or --promote-seeds)")
     if args.trial is not None and args.validate is None:
         raise ValueError("--trial chooses the trial --validate runs; give --validate too")
-    if args.results is not None:
-        validate.output_file(args.results, "--results")
-        validate.output_folder(args.figures, "--figures")
+    arguments.check_results(args)
     return names, study_storage(args)
 
 

@@ -36,9 +36,7 @@ def add_parser(subparsers):
                         "(default: %(default)s)")
     arguments.add_workers(p)
     p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("mazes"))
-    p.add_argument("--results", type=pathlib.Path, default=None, metavar="RESULTS.md",
-                   help="also regenerate this page's maze-study block")
-    p.add_argument("--figures", type=pathlib.Path, default=pathlib.Path("docs/figures"))
+    arguments.add_results(p, "this page's maze-study block")
     arguments.add_no_progress(p)
     p.set_defaults(func=run)
 
@@ -49,9 +47,7 @@ def run(args):
     from models import rooms
     try:
         validate.output_folder(args.out, "--out")
-        if args.results is not None:
-            validate.output_file(args.results, "--results")
-            validate.output_folder(args.figures, "--figures")
+        arguments.check_results(args)
         specs = mazes.plan(args.sizes, args.mazes, args.seeds, args.steps_per_cell)
     except (ValueError, rooms.MapError) as e:
         return fail(str(e))

@@ -3,17 +3,15 @@ with --results, the tables of a page such as RESULTS.md too."""
 import pathlib
 
 from experiments.checks import validate
+from experiments.commands import arguments
 from experiments.commands.common import RUNS_FAILED, fail, failed_line
 
 
 def add_parser(subparsers):
     p = subparsers.add_parser("report", help="rebuild summary.json, REPORT.md and figures")
     p.add_argument("dir", type=pathlib.Path)
-    p.add_argument("--results", type=pathlib.Path, default=None, metavar="RESULTS.md",
-                   help="also regenerate the tables of this page (between its markers), "
-                        "copy the figures to --figures and summary.json beside it")
-    p.add_argument("--figures", type=pathlib.Path, default=pathlib.Path("docs/figures"))
-    from experiments.commands import arguments
+    arguments.add_results(p, "the tables of this page (between its markers), copy the "
+                             "figures to --figures and summary.json beside it")
     from models import rooms
     p.add_argument("--room", type=arguments.room, default=False, metavar="NAME|FILE",
                    help="only the runs in this room (default: every room's runs, each "
@@ -24,9 +22,7 @@ def add_parser(subparsers):
 def _check(args):
     validate.results_folder(args.dir, writable=True)
     validate.output_folder(args.dir / "figures", "the figures folder")
-    if args.results is not None:
-        validate.output_file(args.results, "--results")
-        validate.output_folder(args.figures, "--figures")
+    arguments.check_results(args)
 
 
 def run(args):
