@@ -125,10 +125,21 @@ def run(out, robots, seeds, steps, readings, combos, baseline=None, workers=None
         plans = {DEFAULT: default_specs, **plans}
     for name, specs in plans.items():  # refuse damaged or mismatched folders first
         runner.pending(out / name, specs)
-    failed = []
+    # Every cell's runs on one worker pool, cell after cell: a pool's start costs about
+    # as much as a short cell's runs. A spec that two cells share (their readings alike
+    # for a robot) waits for a second pool, so each run is written to its own cell.
+    batches = []
     for name, specs in plans.items():
-        ran = runner.run(specs, out / name, workers=workers, progress=progress)
-        failed += [(f"{name}/{s.name}", e) for s, e in ran.failed]
+        for spec in specs:
+            batch = next((b for b in batches if spec not in b), None)
+            if batch is None:
+                batches.append(batch := {})
+            batch[spec] = name
+    failed = []
+    for batch in batches:
+        ran = runner.run(list(batch), lambda spec, cell=batch: out / cell[spec],
+                         workers=workers, progress=progress)
+        failed += [(f"{batch[s]}/{s.name}", e) for s, e in ran.failed]
     cell_runs = {DEFAULT: results.load_runs(baseline if baseline is not None else out / DEFAULT,
                                             default_specs)}
     for name, specs in plans.items():
