@@ -7,7 +7,7 @@ from experiments import paper
 from experiments.checks import validate
 from experiments.commands import arguments
 from experiments.commands.common import (check_agent, check_robots, fail, finish, plan,
-                                          report_if_any, selected_robots)
+                                          selected_robots)
 from experiments.running import settings
 
 
@@ -101,11 +101,16 @@ def _sweep(args, values):
     baseline = _baseline(args)  # the default's runs, checked before running any
     for folder, specs in plans:  # refuse damaged or mismatched folders before running any
         runner.pending(folder, specs)
-    rows, failed = [], []
+    # Every value's runs on one worker pool, value after value (a pool's start costs
+    # about as much as a short value's runs); each run in its value's folder.
+    where = {spec: folder for folder, specs in plans for spec in specs}
+    ran = runner.run(list(where), where.__getitem__, workers=args.workers,
+                     progress=not args.no_progress)
+    failed = [(f"{where[s].name}/{s.name}", e) for s, e in ran.failed]
+    rows = []
     for ((_, v), (folder, specs)) in zip(values, plans):
-        ran = runner.run(specs, folder, workers=args.workers, progress=not args.no_progress)
-        failed += [(f"{folder.name}/{s.name}", e) for s, e in ran.failed]
-        if report_if_any(folder, ran) is not None:
+        if len(runner.pending(folder, specs)) < len(specs):  # a complete run to report
+            report.build(folder)
             rows.append((v, results.load_runs(folder)))
     if baseline is not None:
         rows = _with_baseline(args, rows, baseline)
