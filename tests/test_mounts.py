@@ -235,6 +235,20 @@ def test_a_bad_mount_on_the_command_line_exits_2_before_any_work(tmp_path):
     assert not any(out.iterdir())
 
 
+def test_a_run_of_a_mount_file_of_its_own_name_is_reported(tmp_path):
+    """A mount file outside models/mounts, named as no shipped robot: its runs and their
+    report (the optimal-path yardstick finds the robot by the file, not by its name)."""
+    path = tmp_path / "my_point.toml"
+    text = tasks.robots.MOUNTS["point"].read_text()
+    path.write_text(text.replace('name = "point"', 'name = "my_point"', 1))
+    assert 'name = "my_point"' in path.read_text()
+    out = tmp_path / "out"
+    proc = ebrl("run", "--robot", str(path), "--condition", "avoidance", "--seeds", "0",
+                "--steps", "300", "--out", str(out), "--no-progress")
+    assert proc.returncode == 0, proc.stderr
+    assert "| my_point | avoidance |" in (out / "REPORT.md").read_text()
+
+
 def test_mounted_planar_robots_do_what_their_drive_promises():
     """`ebrl check`'s accuracy for the point (two-wheel servos added on its own joints) and
     the point mass (thrusters on its replaced slides): within the paper's 5%."""

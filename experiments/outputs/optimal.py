@@ -234,7 +234,9 @@ def yardstick(runs, root=None):
     for robot, condition in sorted({(r, c) for r, c, _ in runs}):
         p = next(run["parameters"] for (r, _, _), run in runs.items() if r == robot)
         file = p.get("robot_file")
-        key = (file or p.get("robot_name", robot), p["drive"] if file else None, p.get("room"))
+        # a mount file's name need not be a shipped one: its path finds it
+        key = (p.get("mount_file") or file or p.get("robot_name", robot),
+               p["drive"] if file else None, p.get("room"))
         if key not in cache:  # one per robot, whichever learners ran it
             cache[key] = optimal(*key)
         best = cache[key]

@@ -138,6 +138,8 @@ class RunSpec:
             "model_sha256": model_digest(entry, task, self.room),
         } | ({} if self.behaviour is None else {"behaviour": _genome_dict(self.behaviour)}) \
           | ({"first_trial": True} if self.first_trial else {}) \
+          | ({"mount_file": str(pathlib.Path(self.robot).resolve())}
+             if self.robot.endswith(".toml") else {}) \
           | ({} if self.protocol == "adopted" else {"protocol": self.protocol}) \
           | ({} if self.room is None else {"room": self.room})
 
