@@ -304,17 +304,29 @@ def test_the_gait_turns_a_blocked_moves_rest_the_way_its_reading_says(leftover_t
         env.close()
 
 
-def test_a_fall_of_the_gait_is_a_physics_error():
+@pytest.mark.parametrize("robot", ["ant", "quadruped"])
+def test_the_gait_judges_a_fall_at_a_phases_end(robot):
+    """Dropped from 0.3 units above its rest height rolled 40 degrees (past max_tilt, 30,
+    from the first tick), the robot lands on its legs and the step ends: a tilt within a
+    phase is no fall. Dropped on its back, the phase ends at 180 degrees: a PhysicsError."""
     from dm_control.rl import control
-    env = tasks.load("ant", seed=0)
+    env = tasks.load(robot, seed=0, sensor_noise=0.0, action_noise=0.0, start_jitter=False)
     try:
-        env.reset()
-        physics = env.physics
-        physics.data.qpos[3:7] = (math.cos(0.4), math.sin(0.4), 0.0, 0.0)  # rolled 46 degrees
-        physics.data.qpos[2] = 1.5
-        physics.forward()
-        with pytest.raises(control.PhysicsError, match="tipped over"):
-            env.step([0.0])
+        assert env.physics.gait["max_tilt"] == 30.0
+        for roll, falls in ((40.0, False), (180.0, True)):
+            env.reset()
+            physics = env.physics
+            half = math.radians(roll) / 2
+            physics.data.qpos[3:7] = (math.cos(half), math.sin(half), 0.0, 0.0)
+            physics.data.qpos[2] += 0.3
+            physics.forward()
+            assert math.degrees(physics.tilt()) == pytest.approx(roll)
+            if falls:
+                with pytest.raises(control.PhysicsError, match="tipped over"):
+                    env.step([0.5])
+            else:
+                env.step([0.5])
+                assert math.degrees(physics.tilt()) < 5.0
     finally:
         env.close()
 

@@ -72,8 +72,9 @@ def walk(s, n, amp, lift, freq):
     legs' shares in s.share), the torque motors' controls by PD and the position servos'
     to their targets (clipped to their ranges), runs control_substeps substeps and
     advances the phase by frequency * tick seconds.
-    Returns (the first non-OK status of tasks.bindings.run (a fall: TIPPED), else OK;
-    the substeps run)."""
+    Returns (the first non-OK status of tasks.bindings.run (UNSTABLE), else OK; the
+    substeps run). The tilt is not checked here: a fall is judged at a phase's end
+    (`ended`), as the car's motors judge it (tasks.kernels.motors.wheel_phase)."""
     kp, kd, tick = s.kp, s.kd, s.tick
     k = s.control_substeps
     phase, target, share, rest, qpos, qvel = s.phase, s.target, s.share, s.rest, s.qpos, s.qvel
@@ -98,7 +99,7 @@ def walk(s, n, amp, lift, freq):
             for j in range(joints):
                 u += s.servo_gain[a, j] * (target[j] - rest[j])
             s.ctrl[s.servos[a]] = min(max(u, s.servo_lo[a]), s.servo_hi[a])
-        status = bindings.run(s.m, s.d, k, s.bad_qacc, s.xmat, True, s.min_cos_tilt)
+        status = bindings.run(s.m, s.d, k, s.bad_qacc, s.xmat, False, s.min_cos_tilt)
         if status != bindings.OK:
             return status, n * k
         phase[0] = (phase[0] + freq * tick) % 1.0
@@ -142,6 +143,16 @@ def clip_command(v):
 
 
 @njit(cache=True)
+def ended(s, status, n):
+    """A phase's end, the legs back at rest: (TIPPED, n) when the base ends it tilted
+    past min_cos_tilt (a fall; a tilt within the phase that the robot recovers from is
+    none), else (status, n)."""
+    if status == bindings.OK and s.xmat[8] < s.min_cos_tilt:
+        return bindings.TIPPED, n
+    return status, n
+
+
+@njit(cache=True)
 def turn(s, angle, leftover):
     """Turns by `angle` rad (counter-clockwise) with heading feedback until within the
     tolerance or the time limit, then settles. The step's own turn is walked only when
@@ -162,7 +173,7 @@ def turn(s, angle, leftover):
             return status, n
         t += chunk
     status, k = hold(s)
-    return status, n + k
+    return ended(s, status, n + k)
 
 
 @njit(cache=True)
@@ -189,7 +200,7 @@ def move(s, distance):
         done = (x - x0) * c + (y - y0) * sn
     if distance > s.coast:
         status, k = hold(s)
-        return status, n + k
+        return ended(s, status, n + k)
     return bindings.OK, n
 
 
