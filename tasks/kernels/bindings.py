@@ -152,6 +152,13 @@ def warning_count(data, warning):
 # -- physics ------------------------------------------------------------------------
 
 @njit(cache=True)
+def tilted(xmat, min_cos_tilt):
+    """Whether a body whose frame is xmat (row-major 3 x 3) is tilted past the angle
+    whose cosine is min_cos_tilt: its z axis's vertical component is below it."""
+    return xmat[8] < min_cos_tilt
+
+
+@njit(cache=True)
 def run(m, d, n, bad_qacc, xmat, free, min_cos_tilt):
     """n substeps as dm_control's legacy step runs them (mj_step2, mj_step n-1 times,
     mj_step1: contacts and kinematics then describe the new state). Returns OK, UNSTABLE
@@ -164,6 +171,6 @@ def run(m, d, n, bad_qacc, xmat, free, min_cos_tilt):
     mj_step1(m, d)
     if bad_qacc[0] != before:
         return UNSTABLE
-    if free and xmat[8] < min_cos_tilt:
+    if free and tilted(xmat, min_cos_tilt):
         return TIPPED
     return OK

@@ -147,7 +147,7 @@ def ended(s, status, n):
     """A phase's end, the legs back at rest: (TIPPED, n) when the base ends it tilted
     past min_cos_tilt (a fall; a tilt within the phase that the robot recovers from is
     none), else (status, n)."""
-    if status == bindings.OK and s.xmat[8] < s.min_cos_tilt:
+    if status == bindings.OK and bindings.tilted(s.xmat, s.min_cos_tilt):
         return bindings.TIPPED, n
     return status, n
 

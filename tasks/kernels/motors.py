@@ -109,7 +109,7 @@ def wheel_phase(s, n):
         status = bindings.run(s.m, s.d, 1, s.bad_qacc, s.xmat, False, s.min_cos_tilt)
         if status != bindings.OK:
             return status
-    if s.free != 0 and s.xmat[8] < s.min_cos_tilt:
+    if s.free != 0 and bindings.tilted(s.xmat, s.min_cos_tilt):
         return bindings.TIPPED
     return bindings.OK
 
