@@ -66,6 +66,11 @@ NAMES_TEXT = "ebrl_names"
 
 MODEL_DIR = pathlib.Path(__file__).resolve().parent
 
+
+class ContractError(ValueError):
+    """A robot file that lacks a part the naming contract asks for (docs/adding_a_robot.md);
+    tasks.navigation reads the contract."""
+
 INTEGRATORS = {"Euler": mujoco.mjtIntegrator.mjINT_EULER,
                "RK4": mujoco.mjtIntegrator.mjINT_RK4,
                "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,

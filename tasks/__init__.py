@@ -17,19 +17,13 @@ import numpy as np
 from dm_control.mujoco import wrapper
 from dm_control.rl import control
 
-from tasks import floating, navigation, render, two_wheel
+from tasks import navigation, render
 from tasks.config import TaskConfig
+from tasks.realisations import REALISATIONS
 from tasks.robots import DRIVES, MOUNTS, PAPER_ROBOTS, ROBOTS, Robot, resolve
 
 __all__ = ["load", "compile_robot", "TaskConfig", "ROBOTS", "MOUNTS", "PAPER_ROBOTS", "DRIVES", "Robot",
-           "resolve"]
-
-# drive -> (Task class, Physics classes by the actuator that marks them, the task
-# config's edit of the model spec)
-_DRIVES = {
-    "two_wheel": (two_wheel.TwoWheel, two_wheel.PHYSICS, navigation.edit_model),
-    "floating": (floating.Floating, {"thrust_x": floating.Physics}, floating.edit_model),
-}
+           "resolve", "REALISATIONS"]
 
 
 class Environment(control.Environment):
@@ -89,7 +83,7 @@ def compile_robot(entry: Robot, config: TaskConfig = TaskConfig(),
         robot = mount.robot_spec(entry.mount)
     spec = models.compose(entry.model, timestep=entry.timestep, integrator=entry.integrator,
                           unit=entry.unit, robot=robot, room=room)
-    _DRIVES[entry.drive][2](spec, config)
+    REALISATIONS[entry.realisation].task_class().edit_model(spec, config)
     try:
         model = spec.compile()
     except ValueError as e:
@@ -117,17 +111,11 @@ def load(robot: str | os.PathLike | Robot, *, drive: str | None = None, seed: in
     `sutton`); fields: TaskConfig fields to change (sensor_noise=0.0, bump="slide", ...)."""
     entry = robot if isinstance(robot, Robot) else resolve(robot, drive)
     config = dataclasses.replace(config or entry.task_config(), **fields)
-    task_cls, physics_classes, _ = _DRIVES[entry.drive]
     model, _ = compile_robot(entry, config, room)
-    names = {mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, i)
-             for i in range(model.nu)}
-    physics_cls = next((cls for act, cls in physics_classes.items()
-                        if models.PREFIX + act in names), physics_classes[next(iter(physics_classes))])
-    if entry.mount is not None:
-        from tasks import mount
-        mounted = mount.classes(entry.mount)
-        physics_cls = mounted.physics
-        task_cls = mounted.task or task_cls
+    realisation = REALISATIONS[entry.realisation]
+    task_cls = realisation.task_class()
+    physics_cls = realisation.physics(**(entry.mount.action.physics_attributes()
+                                         if entry.mount is not None else {}))
     try:
         physics = physics_cls.from_model(wrapper.MjModel(model))
     except navigation.ContractError as e:

@@ -7,16 +7,6 @@ import math
 
 from tasks import readings
 
-#: The task's switches' values, the default first, as the drives' kernels read them (by
-#: index): views of the registry (tasks/readings.py: each one's scope, the paper's words,
-#: its description; docs/interpretation.md: its reason).
-BUMPS = readings.BY_NAME["bump"].values
-THRUSTS = readings.BY_NAME["thrust"].values
-VELOCITY_CODES = readings.BY_NAME["velocity_code"].values
-BLOCKED_MOVES = readings.BY_NAME["blocked_move"].values
-LEFTOVER_TURNS = readings.BY_NAME["leftover_turn"].values
-
-
 def _default(name):
     """A reading field's default: its registry entry's (tasks/readings.py)."""
     return readings.BY_NAME[name].default

@@ -19,7 +19,8 @@ from dm_control import mujoco as dm_mujoco
 from dm_control.rl import control
 from dm_env import specs
 
-from models import NAMES_TEXT, PREFIX, UNIT, UNIT_NUMERIC, contract_names, room_layout, unit_of
+from models import NAMES_TEXT, PREFIX, UNIT, UNIT_NUMERIC, ContractError, contract_names, \
+    room_layout, unit_of
 from tasks.config import TaskConfig
 from tasks.kernels import bindings, body, sensing, steps
 from tasks.kernels.stream import TaskStream
@@ -35,10 +36,6 @@ READING_SCALE = 1.0 / SENSOR_LEVELS
 
 #: A 3D robot tilted more than this (degrees) has fallen over: the step raises.
 MAX_TILT_DEGREES = 10.0
-
-
-class ContractError(ValueError):
-    """A robot file that lacks a part the naming contract asks for."""
 
 
 #: An empty draw: no noise (the kernels take an empty array for "off").
@@ -171,8 +168,14 @@ class Physics(dm_mujoco.Physics):
         #: Rangefinders (the sensor noise draws one normal for each).
         self.n_beams = len(adr)
 
-    #: The drive's record class (an ebrl.records.Record of BODY_FIELDS and the drive's).
+    #: The realisation's record class (an ebrl.records.Record of BODY_FIELDS and its own:
+    #: tasks.kernels.steps.REALISATIONS).
     Record = None
+
+    def phase_settings(self, n_turn, n_move):
+        """The realisation's settings for the episode's two-wheel phases (its ramps): none
+        by default."""
+        return {}
 
     def set_drive(self, **settings):
         """The drive's record (`record`, a `Record`) of the body, the physics' parts and
@@ -302,15 +305,17 @@ class Physics(dm_mujoco.Physics):
 
 
 class Navigation(control.Task):
-    """Reach the goal square from the jittered start; the drive's compiled step acts.
+    """Reach the goal square from the jittered start; the realisation's compiled step acts.
 
-    The dm_env hooks: before_step checks the action, draws the action noise and runs
-    the drive's action (tasks.kernels.steps.act); after_step tests the goal;
-    get_observation draws the sensor noise and reads the range codes (and, floating,
-    the velocity). compiled_step does all of it in one compiled call
-    (tasks.kernels.steps.step), drawing from the buffered stream: the same draws, the
-    same kernels, the same bits. Each drive's task sets its episode's settings in
-    initialize_episode (start_drive).
+    An agent step is tasks.kernels.steps.step, one compiled call: the action clipped, the
+    realisation's action, the goal test, the range codes (and, floating, the velocity),
+    on the step's draws from the task's buffered random stream (`draws`: the action
+    noise's two uniforms, the sensor noise's normals, the velocity noise's). The dm_env
+    hooks run it too: before_step runs the whole step, after_step and get_observation
+    hand on what it found; an episode's first observation is steps.observe. So the hooks
+    and tasks.Environment's compiled step (`compiled_step`, the same call without
+    dm_control's Python around it) are the same step, bit for bit. Each drive's task
+    sets its episode's settings in initialize_episode (start_drive).
 
     A dm_control task (control.Task, as dm_control.suite.base.Task is, whose only part used
     here is its RandomState: importing dm_control.suite imports every suite domain and
@@ -320,6 +325,8 @@ class Navigation(control.Task):
     action_dim = 1
     #: The observation's modalities in order, each a key of get_observation's.
     observation_keys = ("range",)
+    #: The drive's edit of the composed model for its task config (tasks.compile_robot).
+    edit_model = staticmethod(edit_model)
 
     def __init__(self, config=TaskConfig(), *, time_scale=1.0, random=None):
         if not isinstance(random, np.random.RandomState):  # as suite.base.Task takes it
@@ -331,8 +338,12 @@ class Navigation(control.Task):
         self.time_scale = float(time_scale)
         self.sensor_noise = float(config.sensor_noise)
         self.action_noise = float(config.action_noise)
+        self.velocity_noise = float(config.velocity_noise) if "velocity" in self.observation_keys \
+            else 0.0
         self._jitter_xy = config.start_jitter_xy
         self._jitter_heading = np.deg2rad(config.start_jitter_heading)
+        #: The observation the last step sensed, until get_observation hands it on.
+        self._pending = None
 
     @property
     def random(self):
@@ -342,9 +353,6 @@ class Navigation(control.Task):
     def reseed(self, seed):
         """A new random stream for the task: np.random.RandomState(seed)."""
         self.stream = TaskStream(np.random.RandomState(seed))
-
-    #: The floating drive's velocity noise (the only draw after the range noise).
-    velocity_noise = 0.0
 
     # -- episode -------------------------------------------------------------
     def body_settings(self):
@@ -359,39 +367,34 @@ class Navigation(control.Task):
                 np.zeros(n_beams if self.sensor_noise > 0 else 0),
                 np.zeros(2 if self.velocity_noise > 0 else 0))
 
-    def draws(self, physics):
-        """One step's random draws, in the order the hooks make them: the action noise's
-        two uniforms (before_step), the sensor noise's normals (sense), the floating
-        velocity noise's normals (sense_velocity)."""
+    def draws(self, acting=True):
+        """One step's random draws, in their order: the action noise's two uniforms (none
+        when not `acting`: an episode's first observation), the sensor noise's normals,
+        the floating velocity noise's normals."""
         u, z, vz = self._draws
-        self.stream.draws(u, z, self.sensor_noise, vz, self.velocity_noise)
+        self.stream.draws(u if acting else _NO_NOISE, z, self.sensor_noise, vz,
+                          self.velocity_noise)
         return u, z, vz
 
-    def compiled_action(self, action):
-        """The action as a fresh float64 array, clipped to [-1, 1] as checked_action
-        clips it; checked_action's errors for a wrong shape, NaN or inf."""
+    def action_array(self, action):
+        """The action as a fresh float64 array of shape (action_dim,) (a scalar for a
+        one-part action); ValueError for another shape, NaN or inf. Clipping to [-1, 1]
+        is the step's (tasks.kernels.body.clip_unit)."""
         a = np.array(action, dtype=np.float64)
         if a.shape != (self.action_dim,):
             if not (a.ndim == 0 and self.action_dim == 1):
-                self.checked_action(action)
+                raise ValueError(f"action must have shape ({self.action_dim},), got {a.shape}")
             a = a.reshape(1)
-        if not body.clip_unit(a):
-            self.checked_action(action)
+        if not np.all(np.isfinite(a)):
+            raise ValueError(f"action must be finite, got {a.tolist()}")
         return a
 
     def compiled_step(self, action, physics):
-        """The work of env.step's hooks (before_step, the substeps, after_step,
-        get_reward, get_observation, get_termination) in one compiled call
-        (tasks.kernels.steps.step): returns (reward, observation, termination)."""
-        a = self.compiled_action(action)
-        u, z, vz = self.draws(physics)
-        codes, velocity = self._sensed
-        status, n, goal = steps.step(physics.record, a, u, z, vz, codes, velocity)
-        self.finish(n, goal, physics, status)
-        observation = collections.OrderedDict()
-        for key in self.observation_keys:
-            observation[key] = (codes if key == "range" else velocity).copy()
-        return (1.0 if goal else 0.0), observation, (0.0 if goal else None)
+        """An agent step (tasks.kernels.steps.step) without dm_control's hooks around it:
+        returns (reward, observation, termination)."""
+        self.before_step(action, physics)
+        return self.get_reward(physics), self.get_observation(physics), \
+            self.get_termination(physics)
 
     def finish(self, substeps, goal, physics, status=bindings.OK):
         """The end of compiled steps (this task's or a compiled loop's): the substeps
@@ -415,6 +418,7 @@ class Navigation(control.Task):
 
     def initialize_episode(self, physics):
         self.start_drive(physics, **self.drive_settings(physics))
+        self._pending = None
         x, y, heading = physics.start
         if self.config.start_jitter:
             jx, jy = self.random.uniform(-self._jitter_xy, self._jitter_xy, size=2)
@@ -423,35 +427,38 @@ class Navigation(control.Task):
         physics.set_robot_pose(x, y, heading)
 
     def before_step(self, action, physics):
-        """The action checked (checked_action's errors), the action noise's two uniforms
-        drawn, then the drive's action (tasks.kernels.steps.act): its phases' substeps."""
-        a = np.array(self.checked_action(action))
-        u = self.random.random_sample(2) if self.action_noise > 0 else _NO_NOISE
-        status, n = steps.act(physics.record, a, u)
-        self.finish(n, False, physics, status)
-
-    def after_step(self, physics):
-        self._at_goal = body.goal_reached(physics.record)
+        """The whole agent step (tasks.kernels.steps.step) on the checked action: its
+        goal kept for get_reward and get_termination, its observation for
+        get_observation."""
+        a = self.action_array(action)
+        u, z, vz = self.draws()
+        codes, velocity = self._sensed
+        status, n, goal = steps.step(physics.record, a, u, z, vz, codes, velocity)
+        self.finish(n, goal, physics, status)
+        self._pending = self._observation()
 
     def get_observation(self, physics):
+        """The last step's observation; without one (an episode's first, or dm_control's
+        observation_spec before any episode), steps.observe at the current state."""
+        if self._pending is not None:
+            obs, self._pending = self._pending, None
+            return obs
         if physics.record is None:
             # dm_control's observation_spec reads an observation before any episode (its
             # noise draws included): the drive's record is made for it.
             self.start_drive(physics, **self.drive_settings(physics))
+        _, z, vz = self.draws(acting=False)
+        codes, velocity = self._sensed
+        steps.observe(physics.record, z, vz, codes, velocity)
+        return self._observation()
+
+    def _observation(self):
+        """The sensed values as dm_env's observation: a fresh copy of each modality."""
+        codes, velocity = self._sensed
         obs = collections.OrderedDict()
         for key in self.observation_keys:
-            obs[key] = self.sense(physics) if key == "range" else self.sense_velocity(physics)
+            obs[key] = (codes if key == "range" else velocity).copy()
         return obs
-
-    def sense(self, physics):
-        """Range codes (Section 3.2) plus Gaussian noise, clipped to [0, 255]."""
-        noise = (self.random.normal(0.0, self.sensor_noise, size=physics.n_beams)
-                 if self.sensor_noise > 0 else _NO_NOISE)
-        return body.sense(physics.record, noise)
-
-    def sense_velocity(self, physics):
-        """The velocity reading, for a drive whose observation has one."""
-        raise NotImplementedError(f"{type(self).__name__} senses no velocity")
 
     def get_reward(self, physics):
         return 1.0 if self._at_goal else 0.0
@@ -462,16 +469,3 @@ class Navigation(control.Task):
     # -- actions ---------------------------------------------------------------
     def action_spec(self, physics):
         return specs.BoundedArray((self.action_dim,), np.float64, -1.0, 1.0, name="action")
-
-    def checked_action(self, action):
-        """The action as a list of floats clipped to [-1, 1].
-
-        NaN, inf or a shape other than (action_dim,) raise ValueError.
-        """
-        a = np.asarray(action, dtype=np.float64)
-        if a.shape != (self.action_dim,) and not (a.ndim == 0 and self.action_dim == 1):
-            raise ValueError(f"action must have shape ({self.action_dim},), got {a.shape}")
-        values = a.tolist() if a.ndim else [a.item()]
-        if not all(map(math.isfinite, values)):
-            raise ValueError(f"action must be finite, got {values}")
-        return [min(max(v, -1.0), 1.0) for v in values]

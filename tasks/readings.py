@@ -2,8 +2,8 @@
 record), and every reading of both for the commands (EVERY, BY_NAME, applies).
 
 tasks.TaskConfig takes its reading fields' defaults from TASK and checks them with
-Reading.check; tasks.config's BUMPS, THRUSTS, VELOCITY_CODES, BLOCKED_MOVES and
-LEFTOVER_TURNS (which the drives' kernels read by index) are these switches' values.
+Reading.check; the kernels receive a switch as its code (Reading.code: its index in
+the values) and name their constants by `codes`.
 A new task reading is an entry here, the TaskConfig field of its name (default from its
 entry), its kernel and its test. A task reading's scope is the drives it acts on
 (tasks.robots.DRIVES; all when empty); the agent's are scoped by fallback behaviour,
@@ -76,3 +76,10 @@ def applies(reading, robot, condition=None):
     return ((not reading.drives or robot.drive in reading.drives)
             and (not reading.behaviours or robot.avoidance in reading.behaviours)
             and (condition is None or not reading.conditions or condition in reading.conditions))
+
+
+def codes(name, *values):
+    """The codes (ebrl.readings.Reading.code) of a switch's values, in the order asked:
+    what a kernel module names its switch constants by, so they follow the registry."""
+    reading = BY_NAME[name]
+    return reading.code(values[0]) if len(values) == 1 else tuple(map(reading.code, values))

@@ -123,6 +123,10 @@ class Robot:
     name: str
     model: pathlib.Path           # the robot's MJCF file
     drive: str                    # a key of DRIVES
+    #: How the drive's action reaches the body: a name of tasks.realisations.REALISATIONS
+    #: (a shipped robot's, by name; a mount's, its action kind's; a robot file's, by the
+    #: contract's actuators it has: file_realisation).
+    realisation: str = None
     timestep: float = None        # seconds; None keeps the room's 0.05
     integrator: str = None        # None keeps the room's Euler
     time_scale: float = 1.0       # seconds of an agent step over the drive's (a slower robot)
@@ -152,6 +156,8 @@ class Robot:
         object.__setattr__(self, "model", pathlib.Path(self.model))
         merged = dict(d.readings) | dict(self.readings)
         object.__setattr__(self, "readings", tuple(sorted(merged.items())))
+        if self.realisation is None:
+            object.__setattr__(self, "realisation", file_realisation(self.model, self.drive))
 
     def under(self, protocol):
         """This entry under a named protocol (PROTOCOLS): itself for "adopted"; for
@@ -180,19 +186,19 @@ class Robot:
 
 
 ROBOTS = {r.name: r for r in (
-    Robot("two_wheel", MODEL_DIR / "two_wheel.xml", "two_wheel",
+    Robot("two_wheel", MODEL_DIR / "two_wheel.xml", "two_wheel", "servos",
           # the body's reading from stage 1 (trial 6): a smaller robot than its file's 1.5
           readings=(("radius", 1.366638388002404),),
           description="the paper's two-wheel robot as a planar base (slide x, y, hinge yaw)"),
-    Robot("floating", MODEL_DIR / "floating.xml", "floating",
+    Robot("floating", MODEL_DIR / "floating.xml", "floating", "thrusters",
           # the body's readings from stage 1 (trial 9): the literal wall ("moves ... until
           # it bumps": stopped at the bump), a larger puck than its file's 1.5
           readings=(("bump", "stop"), ("radius", 2.477124155927907)),
           description="the paper's floating robot as a planar puck (slide x, y)"),
-    Robot("diff_drive", MODEL_DIR / "diff_drive.xml", "two_wheel", timestep=0.025,
+    Robot("diff_drive", MODEL_DIR / "diff_drive.xml", "two_wheel", "wheels", timestep=0.025,
           integrator="Euler", time_scale=2.5,
           description="a 3D differential-drive robot: free chassis, two wheels, casters"),
-    Robot("hovercraft", MODEL_DIR / "hovercraft.xml", "floating", timestep=0.025,
+    Robot("hovercraft", MODEL_DIR / "hovercraft.xml", "floating", "thrusters", timestep=0.025,
           integrator="implicitfast",
           description="a 3D hovercraft on a free joint, gliding on skids under gravity"),
 )}
@@ -242,7 +248,8 @@ def _mounted(path):
     if key not in _MOUNTED:
         from tasks import mount
         m = mount.parse(path)
-        _MOUNTED[key] = Robot(m.name, m.model, m.drive, unit=m.unit, time_scale=m.time_scale,
+        _MOUNTED[key] = Robot(m.name, m.model, m.drive, m.action.realisation(m.drive),
+                              unit=m.unit, time_scale=m.time_scale,
                               readings=m.readings, accuracy_limits=m.check,
                               description=m.description or f"mounted from {m.file}",
                               mount=m, **_mount_options(m))
@@ -262,6 +269,23 @@ def _mount_options(mount):
 
 
 _MOUNTED = {}
+
+
+def file_realisation(path, drive):
+    """The realisation of a robot file of the naming contract (docs/adding_a_robot.md), by
+    the contract's actuators it declares: the floating drive's thrusters; for the
+    two_wheel drive, wheels where it has ``left_wheel``, else servos (``forward``,
+    ``turn``; a file with neither is refused when loaded, naming both)."""
+    if drive == "floating":
+        return "thrusters"
+    import xml.etree.ElementTree as ElementTree
+    try:
+        root = ElementTree.parse(path).getroot()
+    except (OSError, ElementTree.ParseError):
+        return "servos"   # models.compose names what is wrong with the file
+    actuators = root.find("actuator")
+    names = {a.get("name") for a in actuators} if actuators is not None else set()
+    return "wheels" if "left_wheel" in names else "servos"
 
 
 def file_options(path):

@@ -66,7 +66,7 @@ def test_the_stamp_names_the_files_a_module_reaches():
     names = {p.rsplit("/", 2)[-2] + "/" + p.rsplit("/", 1)[-1]
              for p in compiled.reached(vars(fused), fused.__file__)}
     assert {"ebrl/agent.py", "ebrl/kernels.py", "kernels/steps.py", "kernels/gait.py",
-            "kernels/two_wheel.py", "kernels/floating.py"} <= names
+            "kernels/two_wheel.py", "kernels/thrusters.py"} <= names
 
 
 def _cached_kernel_modules():

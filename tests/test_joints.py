@@ -283,12 +283,12 @@ def test_joint_motors_drive_a_robots_own_actuators_on_named_joints(tmp_path, kin
 
 
 def test_the_joint_controllers_solve_by_hand(tmp_path):
-    """Each controller's controls, from a record set by hand (tasks.kernels.joints.controls):
+    """Each controller's controls, from a record set by hand (tasks.kernels.plan.controls):
     torque motors on tendons roll + steer and roll - steer give the PD torques
     tau = kp (target - q) - kv dq with controls ((tau_roll + tau_steer) / 2,
     (tau_roll - tau_steer) / 2), clipped to +-1; position servos on the joints hold the
     targets; velocity servos command kp (target - q)."""
-    from tasks.kernels import joints
+    from tasks.kernels import plan as joints
     q, dq, target = np.array([0.3, -0.2]), np.array([0.5, 1.0]), np.array([0.5, 0.1])
     for kind in ("mixed", "position", "velocity"):
         env = tasks.load(str(_tricycle(tmp_path, kind)), seed=0)

@@ -8,7 +8,7 @@ import pytest
 
 import tasks
 from tasks.kernels import bindings
-from tasks.kernels.floating import hull_normal
+from tasks.kernels.thrusters import hull_normal
 
 
 def _pair(robot, **fields):
@@ -20,7 +20,7 @@ def _pair(robot, **fields):
 @pytest.mark.parametrize("robot,fields", [
     ("two_wheel", {}),
     ("two_wheel", {"sensor_noise": 0.0, "action_noise": 0.0}),
-    ("diff_drive", {}),  # wheels under servos (WheelPhysics)
+    ("diff_drive", {}),  # wheels under servos (WheelsPhysics)
     ("two_wheel", {"leftover_turn": "commanded"}),
     ("two_wheel", {"blocked_move": "refuse", "leftover_turn": "away"}),
     ("diff_drive", {"blocked_move": "refuse"}),  # a wheels' state undone

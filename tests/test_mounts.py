@@ -11,7 +11,8 @@ import models
 import tasks
 from experiments.running import protocol
 from helpers import ROOT, ebrl
-from tasks import mount, navigation, two_wheel
+from tasks import mount, navigation
+from tasks.realisations.wheel_motors import WheelMotorsPhysics
 
 MOUNTS = ROOT / "models" / "mounts"
 #: Each shipped mount's robot file: where the installed package (or the vendored copy) holds it.
@@ -261,7 +262,7 @@ def test_mounted_planar_robots_do_what_their_drive_promises():
 
 def test_the_fused_loop_takes_every_shipped_mount():
     """Every drive is compiled (tasks.kernels): the gait, the car's motors
-    (MotorWheelPhysics), the point's servos, the point mass's thrusters."""
+    (WheelMotorsPhysics), the point's servos, the point mass's thrusters."""
     from experiments.running import fused
     for name, supported in ((name, True) for name in tasks.MOUNTS):
         env = tasks.load(name, seed=0)
@@ -364,7 +365,7 @@ def test_an_installed_copy_finds_the_shipped_mounts_and_behaviours_by_name(tmp_p
 
 def test_the_car_runs_through_its_own_motors_and_adds_no_actuator():
     """The compiled car's actuators and tendons are exactly its file's (its motors
-    "forward" and "turn" on its tendons), driven by MotorWheelPhysics, whose measured
+    "forward" and "turn" on its tendons), driven by WheelMotorsPhysics, whose measured
     force per unit control on the wheels is the tendons' coefficients; no compiled step
     drives it."""
     import mujoco
@@ -380,7 +381,7 @@ def test_the_car_runs_through_its_own_motors_and_adds_no_actuator():
                       "actuator_biasprm", "tendon_adr", "wrap_prm"):
             assert np.array_equal(getattr(m, field), getattr(own, field)), field
         physics = env.physics
-        assert isinstance(physics, two_wheel.MotorWheelPhysics) and env.steps_compiled
+        assert isinstance(physics, WheelMotorsPhysics) and env.steps_compiled
         assert np.allclose(physics.motor_forces, [[0.5, 0.5], [-0.5, 0.5]], atol=1e-12)
         assert (physics.kp, physics.kv) == (0.2, 0.01)
     finally:
@@ -392,7 +393,7 @@ def test_the_motor_controls_by_hand():
     c0 - c1 = 1, c0 + 2 c1 = 4, so c = (2, 1); clipped to [-1.5, 1.5] x [-1, 0.5]:
     (1.5, 0.5). Three motors [[1, 0], [0, 1], [1, 1]] and tau = (1, 2): the least-norm c
     is M (M^T M)^-1 tau = M (0, 1) = (0, 1, 1) (the exact (1, 2, 0) has a larger norm)."""
-    from tasks.kernels.motors import gram, motor_controls
+    from tasks.kernels.plan import gram, motor_controls
     c = np.zeros(2)
     inf = np.full(2, np.inf)
     m2 = np.array([[1.0, 1.0], [-1.0, 2.0]])

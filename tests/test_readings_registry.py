@@ -88,15 +88,17 @@ def test_every_config_reading_field_takes_its_default_from_the_registry():
 
 def test_the_configs_views_are_the_registrys_values_in_order():
     from ebrl import config
-    from tasks import config as task_config
     assert config.READINGS == {r.name: r.values for r in agent_registry.AGENT if r.switch}
     assert config.FALLBACK_READINGS == ("eq9_dead_zone", "random_in_avoidance", "random_demand")
-    # the drives' kernels read these by index: the order is the kernels' code
-    assert task_config.BUMPS == ("grip", "stop", "slide", "bounce")
-    assert task_config.THRUSTS == ("scaled", "demand", "clipped")
-    assert task_config.VELOCITY_CODES == ("none", "code")
-    assert task_config.BLOCKED_MOVES == ("stop", "refuse")
-    assert task_config.LEFTOVER_TURNS == ("commanded", "away")
+    # the kernels' switch constants are the registry's codes, whatever its order
+    from tasks.kernels import thrusters, two_wheel
+    assert thrusters.THRUST_CLIPPED == registry.BY_NAME["thrust"].values.index("clipped")
+    assert thrusters.BUMP_BOUNCE == registry.BY_NAME["bump"].values.index("bounce")
+    assert two_wheel.BLOCKED_REFUSE == registry.BY_NAME["blocked_move"].values.index("refuse")
+    assert two_wheel.LEFTOVER_AWAY == registry.BY_NAME["leftover_turn"].values.index("away")
+    assert registry.codes("bump", "slide", "grip") == (2, 0)
+    with pytest.raises(ValueError):
+        registry.codes("bump", "sideways")
     for r in registry.EVERY:
         if r.switch:
             assert [r.code(v) for v in r.values] == list(range(len(r.values)))

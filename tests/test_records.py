@@ -5,7 +5,7 @@ from numba import njit
 
 from ebrl import records
 from ebrl.kernels import AGENT_FIELDS, AgentRecord
-from tasks.kernels.floating import FloatingDrive
+from tasks.kernels.thrusters import ThrustersRecord
 from tasks.kernels.stream import Stream, stream_state
 
 
@@ -22,9 +22,9 @@ def test_a_record_is_built_by_name_and_refuses_a_missing_or_unknown_name():
 
 def test_each_record_keeps_its_fields_in_order_under_its_registered_type():
     assert AgentRecord.FIELDS == AGENT_FIELDS
-    assert FloatingDrive.FIELDS[0] == "m" and "restitution" in FloatingDrive.FIELDS
-    import tasks.kernels.floating as module
-    assert module.FloatingDriveType is FloatingDrive.numba_type  # numba's cache finds it by name
+    assert ThrustersRecord.FIELDS[0] == "m" and "restitution" in ThrustersRecord.FIELDS
+    import tasks.kernels.thrusters as module
+    assert module.ThrustersRecordType is ThrustersRecord.numba_type  # numba's cache finds it by name
     with pytest.raises(ValueError, match="repeat"):
         records.record("a", "a")
 

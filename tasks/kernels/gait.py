@@ -1,8 +1,9 @@
-"""The gait's compiled step: the two-wheel action family (tasks.two_wheel.family) walked
-by a trotting central pattern generator with heading feedback (tasks.gait's docstring).
+"""The gait realisation of the two-wheel family, compiled: the family's action
+(tasks.kernels.two_wheel.act) walked by a trotting central pattern generator with heading
+feedback (tasks.realisations.gait's docstring).
 
 `walk` runs n control ticks of the CPG and the PD loops; `turn` and `move` close the
-heading and distance feedback around it; `stop` is the one substep dm_control's
+heading and distance feedback around it; `halt` is the one substep dm_control's
 environment ran after the gait's step (kept: the same bits as the hooks before the gait
 was compiled).
 """
@@ -21,7 +22,7 @@ from tasks.kernels import two_wheel as family
 
 @records.record(
     *BODY_FIELDS, *family.FAMILY_FIELDS,
-    # per listed joint (tasks.gait.Physics: each leg's swing, lift and held joints):
+    # per listed joint (tasks.realisations.gait.GaitPhysics: each leg's swing, lift and held joints):
     # its leg, its role (SWING, LIFT, HELD), the sign that raises the foot (a lift
     # joint's), its qpos and dof addresses and rest angle; its torque motor (-1: none)
     # and that motor's control range; per leg: the swing's forward and turning shares,
@@ -31,7 +32,7 @@ from tasks.kernels import two_wheel as family
     "leg", "role", "lift_sign", "q", "dq", "rest", "acts", "ctrl_lo", "ctrl_hi",
     "forward_share", "turn_share", "offset", "servos", "servo_gain", "servo_rest",
     "servo_lo", "servo_hi",
-    # the gait's parameters (tasks.gait.PARAMETERS): PD gains, seconds per control tick,
+    # the gait's parameters (tasks.realisations.gait.PARAMETERS): PD gains, seconds per control tick,
     # the CPG's amplitude, lift and frequency, the heading feedback, the move's
     # slow-down and coast, the phases' time limits, the feedback's ticks per update and
     # the settling's
@@ -40,11 +41,11 @@ from tasks.kernels import two_wheel as family
     "max_move_seconds", "feedback_seconds", "n_feedback", "n_settle",
     # the CPG's state: its phase (cycles), the joints' targets; scratch: the hips' shares
     "phase", "target", "share")
-class GaitDrive(records.Record):
+class GaitRecord(records.Record):
     """The gait's record (the fields' comments)."""
 
 
-GaitDrive.constructor = njit(cache=True)(lambda *values: GaitDrive(*values))
+GaitRecord.constructor = njit(cache=True)(lambda *values: GaitRecord(*values))
 
 
 @njit(cache=True)
@@ -61,7 +62,7 @@ def remainder(x, y):
     return r
 
 
-#: A listed joint's role in its leg (tasks.gait.Physics): the swing that moves the foot
+#: A listed joint's role in its leg (tasks.realisations.gait.GaitPhysics): the swing that moves the foot
 #: fore and aft, a lift that raises it, a joint held at rest (an optional yaw).
 SWING, LIFT, HELD = 0, 1, 2
 
@@ -74,7 +75,7 @@ def walk(s, n, amp, lift, freq):
     advances the phase by frequency * tick seconds.
     Returns (the first non-OK status of tasks.bindings.run (UNSTABLE), else OK; the
     substeps run). The tilt is not checked here: a fall is judged at a phase's end
-    (`ended`), as the car's motors judge it (tasks.kernels.motors.wheel_phase)."""
+    (`ended`), as the car's motors judge it (tasks.kernels.plan.phase)."""
     kp, kd, tick = s.kp, s.kd, s.tick
     k = s.control_substeps
     phase, target, share, rest, qpos, qvel = s.phase, s.target, s.share, s.rest, s.qpos, s.qvel
@@ -205,9 +206,6 @@ def move(s, distance):
 
 
 @njit(cache=True)
-def stop(s):
+def halt(s):
     """One substep at the last controls."""
     return step_phase(s, 1), 1
-
-
-family.realisation(GaitDrive, turn, move, stop)

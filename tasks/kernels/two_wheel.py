@@ -7,68 +7,40 @@ turn's direction, or away from the nearer side (leftover_turn "away"); with
 blocked_move "refuse" the move is undone first and all of it turned. Then the body
 halts.
 
-`act` is that logic. How a body turns by an angle or moves a distance is its own: each
-realisation's record (tasks.two_wheel.planar, .wheels, .motors, tasks.gait) provides
-`turn_phase`, `move_phase`, `halt`, `save` and `restore` for its type (numba overloads
-of the stubs below), and `act` calls them. tasks.steps dispatches a drive's record here.
+`act` is that logic. How a body turns by an angle or moves a distance is its
+realisation's: `act` takes the realisation's phases as arguments (turn, move, halt, and
+the save and restore of a refused move), and tasks.kernels.steps' table passes each
+realisation's own (servos, wheels, wheel_motors, joint_motors, gait).
 
-Not cached on disk themselves (plain ``@njit``): `act` compiles in its realisation's
-phases, which live in other modules, so it is cached only inside the entry points of
-tasks.steps, whose module reaches every realisation (ebrl.compiled).
+Not cached on disk itself (plain ``@njit``): it compiles in its realisation's phases, so
+it is cached inside the entry points of tasks.kernels.steps, whose module reaches every
+realisation (ebrl.compiled).
 """
 import math
 
 import numpy as np
 from numba import njit
-from numba.extending import overload
 
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from tasks.kernels import bindings, sensing
 from tasks.kernels.body import base_pose, factors
+from tasks.readings import codes
 
-#: The family's fields of a record, after tasks.body.BODY_FIELDS: the substeps of the turn
+#: The family's fields of a record, after tasks.kernels.body.BODY_FIELDS: the substeps of the turn
 #: and the move phases, the largest turn (rad) and move (units) per step, the tolerance
 #: (units) past which a move was blocked, the blocked-move and leftover-turn readings
 #: (BLOCKED_*, LEFTOVER_*), the state a refused move returns to (qpos, qvel, act).
 FAMILY_FIELDS = ("n_turn", "n_move", "max_turn", "max_move", "tolerance", "blocked_move",
                  "leftover_turn", "qpos0", "qvel0", "act0")
 
-#: The blocked-move readings (tasks.config.BLOCKED_MOVES, in order): a blocked move stops
-#: at contact and its rest is turned (STOP), or is refused whole, undone, and all of it
-#: turned (REFUSE); the rest turns the commanded turn's way (COMMANDED) or away from the
-#: side whose beams read nearer (AWAY: tasks.config.LEFTOVER_TURNS, in order).
-BLOCKED_STOP, BLOCKED_REFUSE = range(2)
-LEFTOVER_COMMANDED, LEFTOVER_AWAY = range(2)
+#: The blocked-move readings' codes (tasks/readings.py): a blocked move stops at contact
+#: and its rest is turned (STOP), or is refused whole, undone, and all of it turned
+#: (REFUSE); the rest turns the commanded turn's way (COMMANDED) or away from the side
+#: whose beams read nearer (AWAY).
+BLOCKED_STOP, BLOCKED_REFUSE = codes("blocked_move", "stop", "refuse")
+LEFTOVER_COMMANDED, LEFTOVER_AWAY = codes("leftover_turn", "commanded", "away")
 #: turn_phase's `leftover`: the step's own turn, or a blocked move's leftover turn.
 OWN_TURN, LEFTOVER = False, True
-
-
-# -- what each realisation provides (numba overloads by record type) --------------------
-
-def turn_phase(s, angle, leftover):
-    """Turns the body by `angle` rad counter-clockwise; returns (status, substeps)."""
-    raise NotImplementedError("overloaded for each realisation's record type")
-
-
-def move_phase(s, distance):
-    """Moves the body `distance` units forward; returns (status, substeps)."""
-    raise NotImplementedError("overloaded for each realisation's record type")
-
-
-def halt(s):
-    """Ends the step: the body's drive at rest (stalled parts give up the rest); returns
-    (status, substeps)."""
-    raise NotImplementedError("overloaded for each realisation's record type")
-
-
-def save(s):
-    """Keeps the state a refused move returns to."""
-    raise NotImplementedError("overloaded for each realisation's record type")
-
-
-def restore(s):
-    """Back to the state `save` kept (the caller then runs mj_forward)."""
-    raise NotImplementedError("overloaded for each realisation's record type")
 
 
 # -- the family's step -------------------------------------------------------------------
@@ -110,10 +82,13 @@ def restore_state(s):
 
 
 @njit
-def act(s, a, u):
+def act(s, a, u, turn_phase, move_phase, halt, save, restore):
     """One step of the family for the clipped action a and the action noise's uniform
-    draws u: the turn, the move, a blocked move's leftover turn, the halt. Returns
-    (status, substeps run)."""
+    draws u, on a realisation's phases: turn_phase(s, angle, leftover) and
+    move_phase(s, distance) -> (status, substeps), halt(s) -> (status, substeps) (the
+    body's drive at rest, stalled parts giving up the rest), save(s) and restore(s) (the
+    state a refused move returns to; the caller of restore runs mj_forward). The turn,
+    the move, a blocked move's leftover turn, the halt. Returns (status, substeps run)."""
     noise_turn, noise_move = factors(s, u)
     turn = -a * s.max_turn * noise_turn  # counter-clockwise positive
     move = s.max_move * (1.0 - abs(a)) * noise_move
@@ -149,38 +124,3 @@ def act(s, a, u):
             return status, n
     status, k = halt(s)
     return status, n + k
-
-
-# -- a realisation's registration -------------------------------------------------------
-
-def realisation(record, turn, move, stop, keep=save_state, back=restore_state):
-    """Registers a realisation's kernels for its record type (an ebrl.records.Record
-    class): turn(s, angle, leftover) and move(s, distance) -> (status, substeps),
-    stop(s) -> (status, substeps) (its halt), keep(s) and back(s) (its save and
-    restore; default: MuJoCo's qpos, qvel and act)."""
-    typ = record.numba_type
-
-    @overload(turn_phase)
-    def _turn(s, angle, leftover):
-        if isinstance(s, typ):
-            return lambda s, angle, leftover: turn(s, angle, leftover)
-
-    @overload(move_phase)
-    def _move(s, distance):
-        if isinstance(s, typ):
-            return lambda s, distance: move(s, distance)
-
-    @overload(halt)
-    def _halt(s):
-        if isinstance(s, typ):
-            return lambda s: stop(s)
-
-    @overload(save)
-    def _save(s):
-        if isinstance(s, typ):
-            return lambda s: keep(s)
-
-    @overload(restore)
-    def _restore(s):
-        if isinstance(s, typ):
-            return lambda s: back(s)

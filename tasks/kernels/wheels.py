@@ -1,4 +1,4 @@
-"""The two-wheel family on two wheel hinges rolling on the floor, ``left_wheel`` and
+"""The wheels realisation of the two-wheel family: two wheel hinges rolling on the floor, ``left_wheel`` and
 ``right_wheel``, each under an integrated-velocity servo (the ``diff_drive`` robot): the
 control is the wheel's speed, the servo's target angle integrates it and a PD loop on
 the wheel's angle follows. A phase of n substeps sets the speeds that turn the wheels by
@@ -15,9 +15,10 @@ from tasks.kernels.body import BODY_FIELDS, step_phase
 
 #: Share of a phase over which the wheels' targets move; the rest is for settling.
 RAMP = 0.5
-#: The wheel plan's fields: the substeps of the turn's and the move's ramps, half the
-#: track (m) and the wheels' radius (m).
-PLAN_FIELDS = ("ramp_turn", "ramp_move", "half_track", "wheel_radius")
+#: The ramps' fields: the substeps of the turn's and the move's ramps (ramp_substeps).
+RAMP_FIELDS = ("ramp_turn", "ramp_move")
+#: The wheels' geometry: half the track (m) and the wheels' radius (m).
+WHEEL_FIELDS = ("half_track", "wheel_radius")
 
 
 def ramp_substeps(n):
@@ -25,14 +26,14 @@ def ramp_substeps(n):
     return max(1, round(RAMP * n))
 
 
-@records.record(*BODY_FIELDS, *family.FAMILY_FIELDS, *PLAN_FIELDS, "left_actuator",
-                "right_actuator", "left_act", "right_act", "left_q", "right_q")
-class WheelDrive(records.Record):
-    """The wheels' record: the body, the family's fields, the plan's, the servos' ids,
-    their activations' (act) and the wheel hinges' qpos addresses."""
+@records.record(*BODY_FIELDS, *family.FAMILY_FIELDS, *RAMP_FIELDS, *WHEEL_FIELDS,
+                "left_actuator", "right_actuator", "left_act", "right_act", "left_q", "right_q")
+class WheelsRecord(records.Record):
+    """The wheels' record: the body, the family's fields, the ramps, the wheels' geometry,
+    the servos' ids, their activations' (act) and the wheel hinges' qpos addresses."""
 
 
-WheelDrive.constructor = njit(cache=True)(lambda *values: WheelDrive(*values))
+WheelsRecord.constructor = njit(cache=True)(lambda *values: WheelsRecord(*values))
 
 
 @njit(cache=True)
@@ -83,7 +84,7 @@ def move(s, distance):
 
 
 @njit(cache=True)
-def stop(s):
+def halt(s):
     """The wheels' speeds 0 and their targets where the wheels are."""
     s.ctrl[s.left_actuator] = 0.0
     s.act[s.left_act] = s.qpos[s.left_q]
@@ -91,5 +92,3 @@ def stop(s):
     s.act[s.right_act] = s.qpos[s.right_q]
     return bindings.OK, 0
 
-
-family.realisation(WheelDrive, turn, move, stop)

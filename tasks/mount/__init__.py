@@ -36,22 +36,16 @@ Every error is one line, ``<mount file>: <field>: <what is wrong>`` (MountError)
 
 The package: `fields` (the one-line checks), `records` (Mount, Bumper, Beams, the Action
 base), `kinds` (one Action class per action kind, registered by name: its fields, its
-edit of the spec, its Task and Physics classes), `parsing` (the TOML file to a Mount),
+edit of the spec, its realisation: tasks.realisations), `parsing` (the TOML file to a Mount),
 `spec` (the Mount to the robot's MjSpec).
 """
 from tasks.mount.fields import MountError
 from tasks.mount.kinds import KINDS
 from tasks.mount.parsing import ACTIONS, DROPS, JOINTS, OPTIONS, parse, resolve_file
-from tasks.mount.records import Action, Beams, Bumper, Classes, Mount
+from tasks.mount.records import Action, Beams, Bumper, Mount
 from tasks.mount.spec import BEAMS, robot_spec
 
-__all__ = ["parse", "robot_spec", "classes", "Mount", "MountError", "Bumper", "Beams",
-           "Action", "Classes", "KINDS", "ACTIONS", "JOINTS", "DROPS", "OPTIONS", "BEAMS",
+__all__ = ["parse", "robot_spec", "Mount", "MountError", "Bumper", "Beams",
+           "Action", "KINDS", "ACTIONS", "JOINTS", "DROPS", "OPTIONS", "BEAMS",
            "resolve_file"]
-
-
-def classes(mount: Mount) -> Classes:
-    """The Task class (None: the drive's own) and the Physics class of the mount's
-    action kind: tasks.load's for a mounted robot."""
-    return mount.action.classes(mount)
 

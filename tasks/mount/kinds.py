@@ -1,8 +1,10 @@
 """The action kinds of a mount's [action] table: how the drive's action reaches the
 robot. One class per kind, registered by its name (the only place the name is written),
 each a record of its fields that knows their parsing, which drives take it, what of the
-file it replaces, its edit of the robot's MjSpec, and the Task and Physics classes it
-runs on (tasks.mount.records.Action gives the hooks). Adding a kind is a class here.
+file it replaces, its edit of the robot's MjSpec, and the realisation it runs on
+(tasks.realisations: a kind's name is its realisation's, but `actuators`, which maps a
+file's actuators onto the servos' or the thrusters' contract names);
+tasks.mount.records.Action gives the hooks. Adding a kind is a class here.
 
 The drive modules are imported inside the methods that need them: this module imports
 nothing heavy (the registry reads mounts before any MuJoCo import)."""
@@ -10,9 +12,10 @@ from __future__ import annotations
 
 import dataclasses
 
+from tasks.actuators import joints_moved, spec_kind
 from tasks.mount.fields import fail
-from tasks.mount.records import Action, Classes
-from tasks.mount.spec import actuator, by_name, file_actuator
+from tasks.mount.records import Action
+from tasks.mount.spec import actuator, file_actuator
 
 #: The action kinds by name, in their registration order (the order ACTIONS lists them).
 KINDS: dict[str, type[Action]] = {}
@@ -31,7 +34,7 @@ def register(name: str):
 @dataclasses.dataclass(frozen=True)
 class Servos(Action):
     """two_wheel.xml's velocity servos added: forward and grip on a site of the base,
-    turn on its yaw hinge (tasks.two_wheel.Physics sets their kv at load)."""
+    turn on its yaw hinge (tasks.realisations.servos sets their kv at load)."""
     drives = ("two_wheel",)
     drops = frozenset({"actuators"})
 
@@ -49,10 +52,6 @@ class Servos(Action):
                        [0, 1, 0, 0, 0, 0]).set_to_velocity(kv=1)
         yaw = "yaw" if mount.joints == "planar" else _yaw_joint(mount, base)
         actuator(spec, "turn", mujoco.mjtTrn.mjTRN_JOINT, yaw).set_to_velocity(kv=1)
-
-    def classes(self, mount):
-        from tasks import two_wheel
-        return Classes(None, two_wheel.Physics)
 
 
 def _yaw_joint(mount, base):
@@ -76,10 +75,6 @@ class Thrusters(Action):
         joints = ("x", "y") if mount.joints == "planar" else _slides(mount, base)
         for role, joint in zip(("thrust_x", "thrust_y"), joints):
             actuator(spec, role, mujoco.mjtTrn.mjTRN_JOINT, joint).set_to_motor()
-
-    def classes(self, mount):
-        from tasks import floating
-        return Classes(None, floating.Physics)
 
 
 def _slides(mount, base):
@@ -140,15 +135,19 @@ class Actuators(Action):
             if name != role:
                 names[role] = name
 
-    def classes(self, mount):
-        from tasks import floating, two_wheel
-        physics = {"two_wheel": two_wheel.Physics, "floating": floating.Physics}[mount.drive]
-        return Classes(None, physics)
+    def realisation(self, drive):
+        return {"two_wheel": "servos", "floating": "thrusters"}[drive]
+
+
+#: The contract names of a wheel kind's hinges (wheels, wheel_motors) and of a
+#: wheel_motors mount's motors (motor_0, motor_1, ...), which the realisation reads
+#: (tasks.realisations.wheel_motors).
+WHEEL_JOINTS = ("left", "right")
+MOTOR_ROLE = "motor_{}"
 
 
 def _wheel_joints(fields, table):
-    """The file's wheel joints by role (tasks.two_wheel.WHEEL_JOINTS: left, right)."""
-    from tasks.two_wheel import WHEEL_JOINTS
+    """The file's wheel joints by role (WHEEL_JOINTS: left, right)."""
     for role in WHEEL_JOINTS:
         if role not in table:
             fields.fail(f"action.{role}", "missing: the file's wheel joint")
@@ -159,7 +158,7 @@ def _wheel_joints(fields, table):
 @dataclasses.dataclass(frozen=True)
 class Wheels(Action):
     """diff_drive.xml's integrated-velocity servos added on the file's wheel joints
-    (tasks.two_wheel.WheelPhysics); the file's actuators are dropped."""
+    (tasks.realisations.wheels); the file's actuators are dropped."""
     drives = ("two_wheel",)
     keys = frozenset({"left", "right", "kp", "kv", "force"})
     drops = frozenset({"actuators"})
@@ -192,16 +191,12 @@ class Wheels(Action):
             act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
             act.actrange, act.actlimited = [-1e6, 1e6], mujoco.mjtLimited.mjLIMITED_TRUE
 
-    def classes(self, mount):
-        from tasks import two_wheel
-        return Classes(None, two_wheel.WheelPhysics)
-
 
 @register("wheel_motors")
 @dataclasses.dataclass(frozen=True)
 class WheelMotors(Action):
     """The file's wheel hinges turned through its own motors (torque motors on the wheel
-    joints or on tendons over them), none added: tasks.two_wheel.MotorWheelPhysics."""
+    joints or on tendons over them), none added (tasks.realisations.wheel_motors)."""
     drives = ("two_wheel",)
     keys = frozenset({"left", "right", "motors", "kp", "kv"})
     left: str = ""                  # the file's wheel hinges
@@ -232,8 +227,7 @@ class WheelMotors(Action):
 
     def roles(self):
         """(contract name, the file's name) pairs: the hinges left and right, the motors
-        motor_0, motor_1, ... (tasks.two_wheel.MOTOR_ROLE)."""
-        from tasks.two_wheel import MOTOR_ROLE
+        motor_0, motor_1, ... (MOTOR_ROLE)."""
         return (("left", self.left), ("right", self.right),
                 *((MOTOR_ROLE.format(k), name) for k, name in enumerate(self.motors)))
 
@@ -268,9 +262,8 @@ class WheelMotors(Action):
     def edit(self, mount, spec, base, names):
         names.update((role, name) for role, name in self.roles() if role != name)
 
-    def classes(self, mount):
-        from tasks import two_wheel
-        return Classes(None, two_wheel.motor_wheel_physics(len(self.motors), self.kp, self.kv))
+    def physics_attributes(self):
+        return {"motor_count": len(self.motors), "kp": self.kp, "kv": self.kv}
 
 
 @register("joint_motors")
@@ -279,7 +272,7 @@ class JointMotors(Action):
     """The file's own actuators on two named joints, none added: `forward` (a wheel's
     hinge rolling on the floor, or a slide along the base's heading) and `turn` (a hinge
     about z that turns the base), driven by a controller on their targets for torque
-    motors, position servos or velocity servos (tasks.two_wheel.JointMotorPhysics)."""
+    motors, position servos or velocity servos (tasks.realisations.joint_motors)."""
     drives = ("two_wheel",)
     keys = frozenset({"forward", "turn", "kp", "kv"})
     forward: str = ""
@@ -322,16 +315,16 @@ class JointMotors(Action):
             if joint.type not in kinds:
                 fail(mount.path, f"action.{role}", f"joint {name!r} is not a "
                                                    + ("hinge or a slide" if role == "forward" else "hinge"))
-        on = [a for a in spec.actuators if _moves(spec, a, {self.forward, self.turn})]
+        on = [a for a in spec.actuators if joints_moved(spec, a) & {self.forward, self.turn}]
         for role, name in (("forward", self.forward), ("turn", self.turn)):
-            if not any(_moves(spec, a, {name}) for a in on):
+            if not any(name in joints_moved(spec, a) for a in on):
                 fail(mount.path, f"action.{role}", f"no actuator of {mount.model.name} moves "
                                                    f"joint {name!r}")
-        kind = {_kind(a) for a in on}
+        kind = {spec_kind(a) for a in on}
         if len(kind) != 1 or None in kind:
             fail(mount.path, "action.kind", "joint_motors need the joints' actuators all torque "
                                             "motors, position servos or velocity servos; got "
-                                            + ", ".join(f"{a.name!r}: {_kind(a) or 'other'}" for a in on))
+                                            + ", ".join(f"{a.name!r}: {spec_kind(a) or 'other'}" for a in on))
         kind = kind.pop()
         need = {"torque motors": ("kp", "kv"), "velocity servos": ("kp",), "position servos": ()}[kind]
         for k in ("kp", "kv"):
@@ -341,66 +334,34 @@ class JointMotors(Action):
                 fail(mount.path, f"action.{k}", f"not a gain of {kind} (they hold their "
                                                 "targets with their own)")
 
-    def classes(self, mount):
-        from tasks import two_wheel
-        return Classes(None, two_wheel.joint_motor_physics(
-            (self.forward, self.turn), self.kp or 0.0, self.kv or 0.0))
-
-
-def _moves(spec, act, joints):
-    """Whether the spec's actuator acts on one of the joints (directly or by a tendon)."""
-    import mujoco
-    if act.trntype == mujoco.mjtTrn.mjTRN_JOINT:
-        return act.target in joints
-    if act.trntype == mujoco.mjtTrn.mjTRN_TENDON:
-        tendon = by_name(spec.tendons, act.target)
-        return tendon is not None and any(
-            w.type == mujoco.mjtWrap.mjWRAP_JOINT and w.target.name in joints for w in tendon.path)
-    return False
-
-
-def _kind(act):
-    """A spec's actuator's kind as joint_motors names it, None for another."""
-    import mujoco
-    fixed = act.gaintype == mujoco.mjtGain.mjGAIN_FIXED
-    if not fixed:
-        return None
-    if act.biastype == mujoco.mjtBias.mjBIAS_NONE and act.dyntype == mujoco.mjtDyn.mjDYN_NONE:
-        return "torque motors"
-    if act.biastype != mujoco.mjtBias.mjBIAS_AFFINE:
-        return None
-    kp = act.gainprm[0]
-    if act.biasprm[0] == 0 and act.biasprm[1] == -kp != 0:
-        return "position servos"
-    if (act.biasprm[0] == 0 and act.biasprm[1] == 0 and act.biasprm[2] == -kp != 0
-            and act.dyntype == mujoco.mjtDyn.mjDYN_NONE):
-        return "velocity servos"
-    return None
+    def physics_attributes(self):
+        return {"joints": (self.forward, self.turn), "kp": self.kp or 0.0, "kv": self.kv or 0.0}
 
 
 #: A gait leg's keys ([[action.legs]]): its swing joint, its lift joint or joints, its
-#: held joint or joints (an optional yaw, kept at rest): tasks.gait.Leg.
+#: held joint or joints (an optional yaw, kept at rest): tasks.realisations.gait.Leg.
 LEG_KEYS = ("swing", "lift", "yaw")
 
 
 @register("gait")
 @dataclasses.dataclass(frozen=True)
 class Gait(Action):
-    """The gait drive (tasks.gait): a legged robot's legs, listed with their joints by
+    """The gait (tasks.realisations.gait): a legged robot's legs, listed with their joints by
     role, walk the two-wheel action family through the file's own torque motors or
     position servos."""
     drives = ("two_wheel",)
     keys = frozenset({"gait", "legs"})
-    #: The legs, as tasks.gait.Leg tuples (swing, lifts, held), in the mount's order.
+    #: The legs, as tasks.realisations.gait.Leg tuples (swing, lifts, held), in the mount's order.
     legs: tuple[tuple[str, tuple[str, ...], tuple[str, ...]], ...] = ()
-    #: The [action.gait] table: (parameter, value) pairs, sorted (tasks.gait.PARAMETERS).
+    #: The [action.gait] table: (parameter, value) pairs, sorted
+    #: (tasks.realisations.gait.PARAMETERS).
     parameters: tuple[tuple[str, float], ...] = ()
 
     @classmethod
     def parse(cls, fields, table, drive):
         import math
 
-        from tasks import gait
+        from tasks.realisations import gait
         listed = table.get("legs")
         if listed is None:
             fields.fail("action.legs", "missing: the legs, as [[action.legs]] tables of "
@@ -453,16 +414,11 @@ class Gait(Action):
         _keep_actuators(mount, drop, "the gait walks the legs through the file's own actuators")
         moved = set()
         for act in spec.actuators:
-            if act.trntype == mujoco.mjtTrn.mjTRN_JOINT:
-                moved.add(act.target)
-            elif act.trntype == mujoco.mjtTrn.mjTRN_TENDON:
-                tendon = by_name(spec.tendons, act.target)
-                if tendon is not None:
-                    if "tendons" in drop:
-                        fail(mount.path, "drop", f"actuator {act.name!r} pulls a tendon of "
-                                                 "the file: do not drop its tendons")
-                    moved |= {w.target.name for w in tendon.path
-                              if w.type == mujoco.mjtWrap.mjWRAP_JOINT}
+            if (act.trntype == mujoco.mjtTrn.mjTRN_TENDON and "tendons" in drop
+                    and any(t.name == act.target for t in spec.tendons)):
+                fail(mount.path, "drop", f"actuator {act.name!r} pulls a tendon of "
+                                         "the file: do not drop its tendons")
+            moved |= joints_moved(spec, act)
         for i, (swing, lifts, held) in enumerate(self.legs):
             for key, group in (("swing", (swing,)), ("lift", lifts), ("yaw", held)):
                 for name in group:
@@ -476,10 +432,10 @@ class Gait(Action):
                         fail(mount.path, field, f"no actuator of {mount.model.name} moves "
                                                 f"joint {name!r}")
 
-    def classes(self, mount):
-        from tasks import gait
-        return Classes(gait.Gait, gait.physics_class(dict(self.parameters), self.legs))
+    def physics_attributes(self):
+        from tasks.realisations import gait
+        return {"gait": gait.PARAMETERS | dict(self.parameters), "legs": tuple(self.legs)}
 
     def check_task_config(self, config):
-        from tasks import gait
+        from tasks.realisations import gait
         gait.check_config(config)

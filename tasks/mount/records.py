@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import pathlib
-from typing import ClassVar, NamedTuple
+from typing import ClassVar
 
 
 @dataclasses.dataclass(frozen=True)
@@ -30,18 +30,12 @@ class Beams:
         return self.height is not None
 
 
-class Classes(NamedTuple):
-    """What tasks.load builds for a mount: its Task class (None: the drive's own) and its
-    Physics class."""
-    task: type | None
-    physics: type
-
-
 @dataclasses.dataclass(frozen=True)
 class Action:
     """How the drive's action reaches the robot: one subclass per action kind, registered
     by name (tasks.mount.kinds.register), each a record of its [action] fields that
-    knows their parsing, its edit of the robot's MjSpec and the classes it runs on."""
+    knows their parsing, its edit of the robot's MjSpec and the realisation it runs on
+    (tasks.realisations)."""
     #: The kind's name (the [action] table's kind), set by its registration.
     name: ClassVar[str]
     #: The drives that take it.
@@ -71,9 +65,15 @@ class Action:
         """Adds the kind's actuators to the spec (base: the base body), or checks and maps
         the file's."""
 
-    def classes(self, mount: Mount) -> Classes:
-        """The Task class, Physics class and substeps the mount runs on."""
-        raise NotImplementedError
+    def realisation(self, drive: str) -> str:
+        """The realisation the mount runs on (a name of tasks.realisations.REALISATIONS):
+        the kind's own name, but for a kind that serves several drives."""
+        return self.name
+
+    def physics_attributes(self) -> dict:
+        """The class attributes the realisation's Physics takes from the mount (its
+        joints, gains, legs...; tasks.realisations.Realisation.physics)."""
+        return {}
 
     def check_task_config(self, config) -> None:
         """Refuses task readings (a tasks.TaskConfig) the kind cannot run: ValueError."""

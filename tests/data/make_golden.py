@@ -96,8 +96,8 @@ def step_digest(robot, compiled, **fields):
     rng = np.random.default_rng(5)
     env.reset()
     dim = env.action_spec().shape[0]
-    from tasks import gait
-    for _ in range(25 if isinstance(env.task, gait.Gait) else 300):
+    from tasks.realisations import gait
+    for _ in range(25 if isinstance(env.task, gait.GaitTask) else 300):
         ts = env.step(rng.uniform(-1.2, 1.2, dim))
         for k in sorted(ts.observation):
             h.update(ts.observation[k].tobytes())

@@ -1,7 +1,8 @@
-"""The two-wheel family on a planar base: velocity servos ``forward`` and ``turn`` (and
-``grip``) drive the speed along the heading and the yaw rate directly (the paper's
-``two_wheel`` robot). A turn of angle A over n substeps is the yaw rate A / (n dt), a
-move of D units the speed D / (n dt); the servos are deadbeat, so the phase does it."""
+"""The servos realisation of the two-wheel family: a planar base whose velocity servos
+``forward`` and ``turn`` (and ``grip``) drive the speed along the heading and the yaw
+rate directly (the paper's ``two_wheel`` robot; tasks.realisations.servos reads the
+model). A turn of angle A over n substeps is the yaw rate A / (n dt), a move of D units
+the speed D / (n dt); the servos are deadbeat, so the phase does it."""
 from numba import njit
 
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
@@ -11,11 +12,11 @@ from tasks.kernels.body import BODY_FIELDS, step_phase
 
 
 @records.record(*BODY_FIELDS, *family.FAMILY_FIELDS, "forward_actuator", "turn_actuator")
-class PlanarDrive(records.Record):
-    """The planar base's record: the body, the family's fields, the two servos' ids."""
+class ServosRecord(records.Record):
+    """The servos' record: the body, the family's fields, the two servos' ids."""
 
 
-PlanarDrive.constructor = njit(cache=True)(lambda *values: PlanarDrive(*values))
+ServosRecord.constructor = njit(cache=True)(lambda *values: ServosRecord(*values))
 
 
 @njit(cache=True)
@@ -42,10 +43,7 @@ def move(s, distance):
 
 
 @njit(cache=True)
-def stop(s):
+def halt(s):
     """Both servos' speeds 0."""
     drive(s, 0.0, 0.0)
     return bindings.OK, 0
-
-
-family.realisation(PlanarDrive, turn, move, stop)

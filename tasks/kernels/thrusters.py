@@ -1,4 +1,5 @@
-"""The floating drive's step as compiled kernels (Section 3.3): thrust, then coast.
+"""The thrusters realisation: the floating drive's step as compiled kernels (Section
+3.3): thrust, then coast (tasks.realisations.thrusters reads the model).
 
 At the start of the step the velocity changes by the demand (the thrust reading) scaled
 by the action noise, during one substep (the thrust phase); then the robot coasts for
@@ -13,12 +14,13 @@ from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a ker
 from ebrl import records
 from tasks.kernels import bindings
 from tasks.kernels.body import BODY_FIELDS, factors, step_phase
+from tasks.readings import codes
 
-#: The thrust readings (tasks.config.THRUSTS, in order).
-THRUST_SCALED, THRUST_DEMAND, THRUST_CLIPPED = range(3)
-#: The bump readings as the coast runs them: the contact's physics alone ("grip",
-#: "slide"), or the velocity change at a contact ("stop", "bounce").
-BUMP_PHYSICS, BUMP_STOP, BUMP_BOUNCE = range(3)
+#: The thrust readings' codes (tasks/readings.py).
+THRUST_SCALED, THRUST_DEMAND, THRUST_CLIPPED = codes("thrust", "scaled", "demand", "clipped")
+#: The bump readings' codes that the coast acts on: the velocity change at a contact
+#: ("stop", "bounce"); under the others ("grip", "slide") the contact's physics alone.
+BUMP_STOP, BUMP_BOUNCE = codes("bump", "stop", "bounce")
 
 
 @records.record(
@@ -32,17 +34,17 @@ BUMP_PHYSICS, BUMP_STOP, BUMP_BOUNCE = range(3)
     # scale (units/step), the 0-255 code's levels come from the body; scratch for
     # mj_objectVelocity
     "velocity", "velocity_code", "velocity_full", "velocity6",
-    # the bump reading (BUMP_*), the share of the speed into a wall "bounce" reflects,
+    # the bump reading's code (tasks/readings.py), the share of the speed into a wall "bounce" reflects,
     # the bumper geom's id, the base's x and y velocity dofs, MuJoCo's contact count and
-    # array (tasks.bindings.contact_views), scratch: the state before a substep, the
+    # array (tasks.kernels.bindings.contact_views), scratch: the state before a substep, the
     # contact's normal
     "bump", "restitution", "hull", "dof_x", "dof_y", "ncon", "contact_f", "contact_i",
     "layout", "qpos0", "qvel0", "normal")
-class FloatingDrive(records.Record):
-    """The floating robot's record (the fields' comments)."""
+class ThrustersRecord(records.Record):
+    """The thrusters' record (the fields' comments)."""
 
 
-FloatingDrive.constructor = njit(cache=True)(lambda *values: FloatingDrive(*values))
+ThrustersRecord.constructor = njit(cache=True)(lambda *values: ThrustersRecord(*values))
 
 
 @njit(cache=True)
@@ -85,7 +87,7 @@ def bump_phase(s, n):
     bumper into a wall while moving towards it is undone (qpos back, so no contact force
     acts), the velocity becomes 0 ("stop") or its mirror image off the wall, the part
     into it scaled by the restitution ("bounce"), and mj_forward recomputes the state."""
-    if s.bump == BUMP_PHYSICS:
+    if s.bump != BUMP_STOP and s.bump != BUMP_BOUNCE:
         return step_phase(s, n)
     qpos, qvel, qpos0, qvel0, normal = s.qpos, s.qvel, s.qpos0, s.qvel0, s.normal
     dx, dy = s.dof_x, s.dof_y

@@ -1,6 +1,7 @@
-"""The gait drive: the two-wheel action family (Section 3.3) executed by a legged robot.
+"""The gait realisation: the two-wheel action family (Section 3.3) executed by a legged
+robot.
 
-Action a in [-1, 1], as tasks.two_wheel: turn |a| rad (a < 0 left), then move 2 (1 - |a|)
+Action a in [-1, 1], as tasks.two_wheel's: turn |a| rad (a < 0 left), then move 2 (1 - |a|)
 units along the new heading; a move that a wall stops is finished as a turn in the same
 direction (or away from the nearer side, with leftover_turn="away"), at 1 rad per 2 units;
 each part scaled by the action noise. A legged body has
@@ -37,8 +38,8 @@ tilt within a phase that the robot recovers from is none (docs/interpretation.md
 suite quadruped": seed 8's one tick at 31 degrees). A run that raises one is a failed run.
 
 The walking itself is compiled (tasks.kernels.gait: the CPG, the PD loops and the
-feedback, as the two-wheel family's realisation, tasks.kernels.two_wheel.act); this module
-reads the legs' shares from the model and gives the episode's settings.
+feedback, the phases of the two-wheel family's step, tasks.kernels.two_wheel.act); this
+module reads the legs' shares from the model and gives the episode's settings.
 """
 import math
 
@@ -46,10 +47,9 @@ import mujoco
 import numpy as np
 
 from tasks import navigation
-
-from tasks.kernels.gait import GaitDrive
-from tasks.two_wheel import control_ranges, family_settings, is_position_servo, \
-    is_torque_motor, length_gains
+from tasks.actuators import control_ranges, length_gains, model_kind
+from tasks.kernels.gait import GaitRecord
+from tasks.two_wheel import TwoWheel
 
 #: The gait's parameters (a mount's [action.gait] may set any of them) and defaults.
 PARAMETERS = {
@@ -76,11 +76,12 @@ PARAMETERS = {
 Leg = tuple[str, tuple[str, ...], tuple[str, ...]]
 
 
-class Physics(navigation.Physics):
+class GaitPhysics(navigation.Physics):
     """A legged base on a free joint, its legs' joints under the gait: PD loops onto
-    their torque motors, or their targets onto position servos."""
+    their torque motors, or their targets onto position servos. A mount's parameters and
+    legs are set on a subclass (tasks.realisations.Realisation.physics)."""
 
-    Record = GaitDrive
+    Record = GaitRecord
     gait = dict(PARAMETERS)
     #: The legs (Leg), in the mount's order.
     legs: tuple[Leg, ...] = ()
@@ -144,7 +145,7 @@ class Physics(navigation.Physics):
         gain, lengths = length_gains(mjm, self._q)
         movers = np.flatnonzero(np.any(gain != 0.0, axis=1))
         lo, hi = control_ranges(mjm, np.arange(mjm.nu))
-        if all(is_torque_motor(mjm, a) and int(mjm.actuator_trntype[a]) == int(
+        if all(model_kind(mjm, a) == "torque motors" and int(mjm.actuator_trntype[a]) == int(
                 mujoco.mjtTrn.mjTRN_JOINT) for a in movers):
             acts = np.full(len(joints), -1, dtype=np.int64)
             for a in movers:
@@ -154,7 +155,7 @@ class Physics(navigation.Physics):
                 raise navigation.ContractError(f"the gait drive needs a motor on joint {missing[0]!r}")
             self._acts = acts
             self._servos = np.zeros(0, dtype=np.int64)
-        elif all(is_position_servo(mjm, a) for a in movers):
+        elif all(model_kind(mjm, a) == "position servos" for a in movers):
             self._acts = np.full(len(joints), -1, dtype=np.int64)
             self._servos = movers.astype(np.int64)
         else:
@@ -237,10 +238,8 @@ def check_config(config):
                          "be put back)")
 
 
-class Gait(navigation.Navigation):
+class GaitTask(TwoWheel):
     """The two-wheel action family through the CPG (see the module's docstring)."""
-
-    action_dim = 1
 
     def drive_settings(self, physics):
         check_config(self.config)
@@ -248,12 +247,5 @@ class Gait(navigation.Navigation):
         # turn and move
         g = physics.gait
         physics.step_seconds = g["max_turn_seconds"] + g["max_move_seconds"]
-        return dict(n_turn=0, n_move=0, **family_settings(self.config, physics),
+        return dict(n_turn=0, n_move=0, **self.family_settings(physics),
                     **physics.episode_settings())
-
-
-def physics_class(parameters, legs):
-    """gait.Physics with a mount's parameters (a dict of PARAMETERS' names) and legs (Leg
-    tuples)."""
-    return type("GaitPhysics", (Physics,), {"gait": PARAMETERS | dict(parameters),
-                                            "legs": tuple(legs)})

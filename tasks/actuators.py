@@ -1,0 +1,136 @@
+"""What a robot file's actuators do, read once for every part that drives them: the
+realisations on a file's own actuators (tasks.realisations: wheel_motors, joint_motors,
+gait) and the mount kinds that check a file before it is loaded (tasks.mount.kinds).
+
+- `kind`: an actuator's kind by its gain, bias and activation dynamics (not by its
+  element's name): a torque motor, a position servo or a velocity servo (KINDS), or None.
+  `model_kind` reads a compiled model's actuator, `spec_kind` an MjSpec's.
+- `joints_moved`: the joints an MjSpec's actuator acts on, directly or by a fixed tendon.
+- `motor_forces`, `length_gains`, `control_ranges`: a compiled model's actuators measured
+  at its rest pose (their generalised force per unit control; their length per unit of
+  a joint), and their control ranges.
+- `require_independent`: the refusal of motors that cannot move two joints apart.
+
+Nothing heavy is imported at the top: the mount parser uses this module before MuJoCo is
+needed, and the kernels read KINDS.
+"""
+import numpy as np
+
+#: The actuators' kinds a controller knows, as the docs and errors write them (their
+#: index is the joint_motors controller's code: tasks.kernels.joint_motors).
+KINDS = ("torque motors", "position servos", "velocity servos")
+#: The control each motor is probed with at load, to measure its generalised force per
+#: unit control (small, so no joint's actuatorfrcrange clips it).
+PROBE = 1e-3
+
+
+def kind(gaintype, gainprm, biastype, biasprm, dyntype):
+    """An actuator's kind (KINDS) from its parameters, None for another:
+    - a torque motor (MuJoCo's <motor>): a fixed gain, no bias, no activation dynamics;
+    - a position servo (<position>, or a <general> of bias -kp * length, any damping):
+      its control is the length it holds;
+    - a velocity servo (<velocity>: bias -kv * speed, no position term, no activation
+      dynamics): its control is the speed it holds."""
+    import mujoco
+    if int(gaintype) != int(mujoco.mjtGain.mjGAIN_FIXED):
+        return None
+    none = int(dyntype) == int(mujoco.mjtDyn.mjDYN_NONE)
+    if int(biastype) == int(mujoco.mjtBias.mjBIAS_NONE):
+        return KINDS[0] if none else None
+    if int(biastype) != int(mujoco.mjtBias.mjBIAS_AFFINE) or biasprm[0] != 0.0:
+        return None
+    gain = gainprm[0]
+    if biasprm[1] == -gain != 0.0:
+        return KINDS[1]
+    if none and biasprm[1] == 0.0 and biasprm[2] == -gain != 0.0:
+        return KINDS[2]
+    return None
+
+
+def model_kind(model, a):
+    """The kind of a compiled model's actuator a (an MjModel)."""
+    return kind(model.actuator_gaintype[a], model.actuator_gainprm[a], model.actuator_biastype[a],
+                model.actuator_biasprm[a], model.actuator_dyntype[a])
+
+
+def spec_kind(act):
+    """The kind of an MjSpec's actuator."""
+    return kind(act.gaintype, act.gainprm, act.biastype, act.biasprm, act.dyntype)
+
+
+def joints_moved(spec, act):
+    """The names of the joints an MjSpec's actuator acts on: its joint, or the joints a
+    fixed tendon it pulls wraps; empty for any other transmission."""
+    import mujoco
+    if act.trntype == mujoco.mjtTrn.mjTRN_JOINT:
+        return {act.target}
+    if act.trntype == mujoco.mjtTrn.mjTRN_TENDON:
+        tendon = next((t for t in spec.tendons if t.name == act.target), None)
+        if tendon is not None:
+            return {w.target.name for w in tendon.path if w.type == mujoco.mjtWrap.mjWRAP_JOINT}
+    return set()
+
+
+def motor_forces(model, motors, dofs):
+    """forces[k, j]: motor k's generalised force on dof j per unit of its control, measured
+    on a scratch MjData at the model's rest pose (qfrc_actuator with motor k's control at
+    PROBE and the others 0, less with all 0, over PROBE; control clamping off meanwhile)."""
+    import mujoco
+    d = mujoco.MjData(model)
+    flags = model.opt.disableflags
+    model.opt.disableflags = flags | int(mujoco.mjtDisableBit.mjDSBL_CLAMPCTRL)
+    try:
+        mujoco.mj_forward(model, d)
+        rest = d.qfrc_actuator[dofs].copy()
+        forces = np.zeros((len(motors), len(dofs)))
+        for k, a in enumerate(motors):
+            d.ctrl[:] = 0.0
+            d.ctrl[a] = PROBE
+            mujoco.mj_forward(model, d)
+            forces[k] = (d.qfrc_actuator[dofs] - rest) / PROBE
+    finally:
+        model.opt.disableflags = flags
+    return forces
+
+
+def length_gains(model, qadrs):
+    """(gain, lengths): gain[a, j] every actuator's length per unit of the joint at qpos
+    address qadrs[j] (central differences at the rest pose, entries under 1e-9 zeroed),
+    and the actuators' lengths at rest. For a joint or a fixed tendon this is the
+    transmission's gear times coefficient, whatever the actuator's kind."""
+    import mujoco
+    d = mujoco.MjData(model)
+    gain = np.zeros((model.nu, len(qadrs)))
+    h = 1e-3
+    for c, q in enumerate(qadrs):
+        lengths = []
+        for delta in (h, -h):
+            d.qpos[:] = model.qpos0
+            d.qpos[q] += delta
+            mujoco.mj_fwdPosition(model, d)
+            lengths.append(d.actuator_length.copy())
+        gain[:, c] = (lengths[0] - lengths[1]) / (2 * h)
+    gain[np.abs(gain) < 1e-9] = 0.0
+    d.qpos[:] = model.qpos0
+    mujoco.mj_fwdPosition(model, d)
+    return gain, d.actuator_length.copy()
+
+
+def control_ranges(model, actuators):
+    """(lo, hi): the actuators' control ranges, infinite where unlimited."""
+    lo = model.actuator_ctrlrange[actuators, 0].copy()
+    hi = model.actuator_ctrlrange[actuators, 1].copy()
+    unlimited = ~model.actuator_ctrllimited[actuators].astype(bool)
+    lo[unlimited], hi[unlimited] = -np.inf, np.inf
+    return lo, hi
+
+
+def require_independent(forces, mtm, what):
+    """models.ContractError naming `what` when the motors, of forces `forces` on two joints
+    and Gram matrix mtm (a, b, e, det: tasks.kernels.plan.gram), cannot move the two
+    joints apart: the determinant 0, to rounding."""
+    from models import ContractError
+    a, _, e, det = mtm
+    if abs(det) <= 1e-12 * max(1e-300, a + e) ** 2:
+        raise ContractError(f"{what}: the motors do not move the two joints independently "
+                            f"(force per unit control on them: {forces.tolist()})")
