@@ -70,8 +70,8 @@ random_in_avoidance  replace / add             intrinsic.Intrinsic
   (3.4)              test_random_in_avoidance_add_is_avoidance_plus_random_clipped
 initial_reliability  a number in [0, 1]        kernels.learn
                      test_initial_reliability_sets_the_forgetting_order
-eq7_signal (eq 7)    reward / surprise_measure kernels.act_memory (kernels.expected_reward),
-                     / surprise_rate           kernels.eq7_signal via kernels.learn_step
+eq7_signal (eq 7)    reward / surprise_measure steps.act_memory (steps.expected_reward),
+                     / surprise_rate           steps.eq7_signal via steps.learn_step
                      test_eq7_signal_by_hand
 eq7_walk (eq 7)      whole / discounted / cut  kernels.eq7
                      test_eq7_walks_by_hand
@@ -79,7 +79,7 @@ forgetting_link      join / cut                kernels.forget
   (2.1)              test_forgetting_joins_or_cuts_the_episode
 recall_candidates    all / past                kernels.recall_since (via kernels.act)
   (2.2)              test_recall_candidates_past_only_by_hand
-exploration (2.3)    fallback / random         kernels.act_memory
+exploration (2.3)    fallback / random         steps.act_memory
                      test_exploration_reading_by_hand
 The defaults reproduce the agent from before the switches bit for bit:
 test_defaults_reproduce_the_agent_before_the_switches (against stored digests).

@@ -39,7 +39,7 @@ import numpy as np
 from numba import njit
 
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
-from ebrl import intrinsic, kernels
+from ebrl import intrinsic, kernels, steps
 from ebrl.config import Config, reading_code
 from ebrl.kernels import DECIDERS, EXPLORATION, FALLBACK, INVALID, eq1, eq5
 from ebrl.similarity import modalities
@@ -49,12 +49,12 @@ __all__ = ["Agent", "DECIDERS", "act_step", "trial_end", "eq1", "eq5"]
 
 @njit(cache=True)
 def act_step(s, f, x, ranges):
-    """One act of an agent with a compiled fallback: kernels.act_memory on the agent's
+    """One act of an agent with a compiled fallback: steps.act_memory on the agent's
     record s, then, where the memory does not choose, the fallback's step (record f,
     ebrl.intrinsic.fallback_step) on the agent's stream. Returns who chose (an index of
     DECIDERS), or INVALID with nothing changed. Agent.act calls it; so does a compiled
     loop, step after step."""
-    element = kernels.act_memory(s, x)
+    element = steps.act_memory(s, x)
     if element == INVALID:
         return INVALID
     if element == FALLBACK:
@@ -66,9 +66,9 @@ def act_step(s, f, x, ranges):
 
 @njit(cache=True)
 def trial_end(s, f):
-    """A trial's end for an agent with a compiled fallback: kernels.end_trial on the
+    """A trial's end for an agent with a compiled fallback: steps.end_trial on the
     agent's record s, then the fallback's reset (record f)."""
-    kernels.end_trial(s)
+    steps.end_trial(s)
     intrinsic.fallback_reset(f)
 
 
@@ -110,9 +110,9 @@ class Agent:
             prev=np.full(M, -1, dtype=np.int64), decided=np.zeros(M, dtype=np.bool_),
             table=np.full(c.recall_size, -1, dtype=np.int64), table_w=np.zeros(c.recall_size),
             obs=np.zeros(n), action=np.zeros(self.action_dim))
-        #: The agent as one record for compiled code (ebrl.kernels.AgentRecord): the
+        #: The agent as one record for compiled code (ebrl.steps.AgentRecord): the
         #: config's numbers, the stream, the arrays above, the counters.
-        self.record = kernels.AgentRecord.build(
+        self.record = steps.AgentRecord.build(
             rng=self.rng, exploration=float(c.exploration_rate), alpha=float(c.alpha),
             threshold=float(c.policy_threshold), floor=float(c.variance_floor),
             initial_utility=float(c.initial_utility),
@@ -126,7 +126,7 @@ class Agent:
             eq7_walk=reading_code("eq7_walk", c.eq7_walk),
             cut_links=c.forgetting_link == "cut", past_only=c.recall_candidates == "past",
             explore_random=c.exploration == "random", random_sd=float(c.random_sd),
-            **{name: getattr(self.memory, name) for name in kernels.AGENT_ARRAYS},
+            **{name: getattr(self.memory, name) for name in steps.AGENT_ARRAYS},
             pending=False, expected=0.0, trial_start=0, size=0, tail=-1, referred=-1, steps=0,
             memory_decisions=0, fallback_decisions=0, decider=-1)
         # The compiled fallbacks (ebrl.intrinsic's) draw from the agent's stream.
@@ -142,9 +142,9 @@ class Agent:
 
     # -- read-outs -----------------------------------------------------------------
     def _counter(name, doc):
-        """A read-only property of the record's counter `name` (kernels.COUNTERS)."""
-        index = kernels.COUNTERS.index(name)
-        return property(lambda self: kernels.counters(self.record)[index], doc=doc)
+        """A read-only property of the record's counter `name` (steps.COUNTERS)."""
+        index = steps.COUNTERS.index(name)
+        return property(lambda self: steps.counters(self.record)[index], doc=doc)
 
     size = _counter("size", "Stored memory elements.")
     tail = _counter("tail", "The current episode's latest element (-1: none).")
@@ -207,7 +207,7 @@ class Agent:
         if self.compiled:  # eq 2-4, eq 1, eq 5, the exploration draw, the fallback
             code = act_step(self.record, self.fallback_record, x, given)
         else:  # the same, with a Python fallback
-            code = kernels.act_memory(self.record, x)
+            code = steps.act_memory(self.record, x)
             if code == FALLBACK:
                 self._action[:] = np.array(self.fallback(given, self.rng),
                                            dtype=np.float64).reshape(self.action_dim)
@@ -223,7 +223,7 @@ class Agent:
         if not math.isfinite(reward):
             raise ValueError("reward must be finite")
         # Store (forgetting one element when full), eq 6, eq 7, time discount.
-        if not kernels.learn_step(self.record, reward):
+        if not steps.learn_step(self.record, reward):
             raise ValueError("learn() needs an act() first")
         if last:
             self.end_episode()
@@ -237,12 +237,12 @@ class Agent:
         recall table is emptied; "keep": it stays, its entries advancing at the next
         act. Either way eq 7's starting point is reset: the trial's memory decisions
         (the latest one, and the decided flags of eq7_scope "decided_only") were judged
-        by its last reward (kernels.end_trial). The fallback's reset(), if any, is
+        by its last reward (steps.end_trial). The fallback's reset(), if any, is
         called."""
         if self.compiled:
             trial_end(self.record, self.fallback_record)
             return
-        kernels.end_trial(self.record)
+        steps.end_trial(self.record)
         reset = getattr(self.fallback, "reset", None)
         if reset is not None:
             reset()

@@ -13,8 +13,8 @@ TABLE1_MEMORY = {"T": 1024, "F": 4096}
 READINGS = {r.name: r.values for r in readings.AGENT if r.switch}
 
 #: The readings that belong to the fallback (Section 3.4's intrinsic behaviour), not to
-#: the learner: every learner's config has them (ebrl.Config; ebrl.baselines._Fallback),
-#: and the runner builds the fallback with them (protocol.make_agent).
+#: the learner: every learner's config has them (ebrl.Config; ebrl.baselines.common._Fallback),
+#: and the runner builds the fallback with them (execution.make_agent).
 FALLBACK_READINGS = tuple(r.name for r in readings.AGENT if r.fallback)
 
 

@@ -22,8 +22,9 @@ Elements 0..size-1 are stored. The recall table is table[e] (an element, -1 for 
 empty entry) and table_w[e] (its weight W), best first: larger weight, then lower
 element.
 
-The readings that are switches (ebrl.config.READINGS) reach the kernels as ints, the
-value's index there (0 = the default reading): learn's eq7_scope (EQ7_TO_START,
+The readings that are switches reach the kernels as ints, their codes
+(ebrl.readings.Reading.code: the value's index in the registry), and the constants here
+are named by those codes (ebrl.readings.codes): learn's eq7_scope (EQ7_TO_START,
 EQ7_DECIDED_ONLY) and forgetting (FORGET_LEAST_RELIABLE, FORGET_OLDEST). The episode
 and recall-table switches act at a trial's end, in ebrl.Agent.end_episode.
 """
@@ -31,7 +32,7 @@ import numpy as np
 from numba import njit
 
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
-from ebrl import records
+from ebrl.readings import codes
 
 INVALID = -2  # act's answer for an observation that is not finite or whose square overflows
 FALLBACK = -1  # act_memory's answer when the fallback is to choose the action
@@ -39,12 +40,14 @@ FALLBACK = -1  # act_memory's answer when the fallback is to choose the action
 #: random action; or the exploration draw, which handed to the fallback a step the
 #: memory would have taken. AgentState.decider holds the index, -1 before any act.
 DECIDERS = ("memory", "intrinsic", "random", "exploration")
-MEMORY, INTRINSIC, RANDOM, EXPLORATION = range(4)
+MEMORY, INTRINSIC, RANDOM, EXPLORATION = map(DECIDERS.index, DECIDERS)
 EXPLORED = -3  # act_memory's answer when its exploration step's random action is s.action
-EQ7_TO_START, EQ7_DECIDED_ONLY = 0, 1  # learn's eq7_scope
-FORGET_LEAST_RELIABLE, FORGET_OLDEST = 0, 1  # learn's forgetting
-EQ7_REWARD, EQ7_SURPRISE_MEASURE, EQ7_SURPRISE_RATE = 0, 1, 2  # eq7_signal
-EQ7_WHOLE, EQ7_DISCOUNTED, EQ7_CUT = 0, 1, 2  # eq7_walk
+#: The switch readings' codes (ebrl.readings: each value's index in its registry entry).
+EQ7_TO_START, EQ7_DECIDED_ONLY = codes("eq7_scope", "to_start", "decided_only")
+FORGET_LEAST_RELIABLE, FORGET_OLDEST = codes("forgetting", "least_reliable", "oldest")
+EQ7_REWARD, EQ7_SURPRISE_MEASURE, EQ7_SURPRISE_RATE = codes(
+    "eq7_signal", "reward", "surprise_measure", "surprise_rate")
+EQ7_WHOLE, EQ7_DISCOUNTED, EQ7_CUT = codes("eq7_walk", "whole", "discounted", "cut")
 #: recall_candidates "all": no element is too recent to be a candidate.
 NO_EXCLUSION = np.iinfo(np.int64).max
 
@@ -352,75 +355,6 @@ def learn(x, action, reward, step, size, tail, referred, inputs, sums, variance,
     return size, tail, referred
 
 
-# -- the agent as one named record ------------------------------------------------------
-
-#: The record's fields, in the constructor's order.
-AGENT_FIELDS = (
-    # the stream and the config's numbers (floats, so one compiled version serves all)
-    "rng", "exploration", "alpha", "threshold", "floor", "initial_utility",
-    "initial_reliability", "discount", "cutoff", "rho", "decay",
-    # the readings acting here, as ints / flags (ebrl.config.READINGS)
-    "eq7_scope", "forgetting", "flag_decisions", "continuing", "keep_recall",
-    "eq7_signal", "eq7_walk", "cut_links", "past_only", "explore_random", "random_sd",
-    # eq 3's modalities
-    "group_of", "group_size", "group_weight",
-    # the memory (2.1), the variance sums (eq 2), the act's scratch, the recall table (2.2)
-    "inputs", "sums", "variance", "sim", "actions", "utility", "rel", "time", "nxt", "prev",
-    "decided", "table", "table_w",
-    # the last act's input and action, whether learn has yet to store them, the reward
-    # its memory decision expected (eq7_signal), the current trial's first step
-    "obs", "action", "pending", "expected", "trial_start",
-    # the counters: stored elements, the episode's latest element, the latest element used
-    # for a decision (eq 7), steps learnt, decisions by memory and by the fallback, who
-    # chose the last action (an index of DECIDERS)
-    "size", "tail", "referred", "steps", "memory_decisions", "fallback_decisions", "decider",
-)
-
-
-@records.record(*AGENT_FIELDS)
-class AgentRecord(records.Record):
-    """ebrl.Agent's whole state as one record that compiled code takes as it is: the
-    memory's arrays (as the module docstring lays them out), the recall table, the
-    config's numbers, the agent's random stream (its numpy Generator, drawn in place),
-    the last act's input and action until learn stores them, and the counters.
-    Agent.act and Agent.learn call act_memory / learn_step on it, and a compiled loop
-    (experiments.running.fused) iterates the same functions on the same record. Python
-    reads its counters by name through `counters` (COUNTERS); its arrays are the caller's own (shared)."""
-
-
-AgentRecord.constructor = njit(cache=True)(lambda *values: AgentRecord(*values))
-
-
-#: The record's arrays, in order (AGENT_FIELDS from "group_of" to "action").
-AGENT_ARRAYS = AGENT_FIELDS[AGENT_FIELDS.index("group_of"): AGENT_FIELDS.index("pending")]
-
-
-#: The record's counters, in the order `counters` returns them.
-COUNTERS = ("size", "tail", "referred", "steps", "memory_decisions", "fallback_decisions",
-            "decider")
-
-
-@njit(cache=True)
-def counters(s):
-    """The record's counters, in COUNTERS' order."""
-    return (s.size, s.tail, s.referred, s.steps, s.memory_decisions, s.fallback_decisions,
-            s.decider)
-
-
-@njit(cache=True)
-def expected_reward(s, element):
-    """The reward a memory decision for `element` expects (eq7_signal): eq 5's measure
-    min(W, U) of its recall entry (EQ7_SURPRISE_MEASURE; the first entry holding it), or
-    its utility as a reward per step, (1 - gamma) U (EQ7_SURPRISE_RATE: a steady reward r
-    each step sums by eq 6 to r / (1 - gamma))."""
-    if s.eq7_signal == EQ7_SURPRISE_RATE:
-        return (1.0 - s.discount) * s.utility[element]
-    for e in range(s.table.shape[0]):
-        if s.table[e] == element:
-            return eq5(s.table_w[e], s.utility[element])
-    return 0.0
-
-
 @njit(cache=True)
 def clip_unit(a):
     """a clipped to [-1, 1] in place, as np.clip (Section 3.4's random action is clipped;
@@ -430,86 +364,3 @@ def clip_unit(a):
         v = v if v > -1.0 else -1.0
         a[i] = v if v < 1.0 else 1.0
     return a
-
-
-@njit(cache=True)
-def eq7_signal(s, reward):
-    """eq 7's r for the step just taken (learn's r7): the reward itself for eq7_signal
-    "reward"; else the reward less what the step's memory decision expected
-    (s.expected), or the reward alone after a step the memory did not choose."""
-    if s.eq7_signal != EQ7_REWARD and s.decider == MEMORY:
-        return reward - s.expected
-    return reward
-
-
-@njit(cache=True)
-def act_memory(s, x):
-    """One act's memory part on record s: eq 2-4 against the memory, the recall table
-    (eq 1), eq 5's choice, then the exploration draw. x is kept as the act's input.
-    Returns the element whose action s.action now holds (decider MEMORY), FALLBACK when
-    the fallback is to fill s.action (decider EXPLORATION when the draw overruled the
-    memory, else left for the fallback's choice), EXPLORED when the draw overruled the
-    memory and exploration is "random" (s.action then holds Section 3.4's random action,
-    Gaussian with sd s.random_sd, clipped; decider EXPLORATION), or INVALID, with
-    nothing changed, for an x that is not finite or whose square overflows. With
-    recall_candidates "past" the candidates are the elements of earlier trials."""
-    since = s.trial_start if s.past_only else NO_EXCLUSION
-    element = act(x, s.size, s.inputs, s.variance, s.group_of, s.group_size, s.group_weight,
-                  s.sim, s.nxt, s.table, s.table_w, s.utility, s.alpha, s.threshold, s.time,
-                  since)
-    if element == INVALID:
-        return INVALID
-    s.obs[:] = x
-    s.pending = True
-    explore = s.rng.random() < s.exploration
-    if element >= 0 and not explore:
-        s.action[:] = s.actions[element]
-        s.referred = element
-        if s.flag_decisions:
-            s.decided[element] = True
-        s.memory_decisions += 1
-        s.decider = MEMORY
-        if s.eq7_signal != EQ7_REWARD:
-            s.expected = expected_reward(s, element)
-        return element
-    s.fallback_decisions += 1
-    s.decider = EXPLORATION if element >= 0 else -1
-    if element >= 0 and s.explore_random:
-        for i in range(s.action.shape[0]):
-            s.action[i] = s.rng.normal(0.0, s.random_sd)
-        clip_unit(s.action)
-        return EXPLORED
-    return FALLBACK
-
-
-@njit(cache=True)
-def learn_step(s, reward):
-    """One learn on record s: stores the last act's (input, action) and learns from
-    reward (`learn`); False, with nothing changed, when no act is pending."""
-    if not s.pending:
-        return False
-    s.size, s.tail, s.referred = learn(
-        s.obs, s.action, reward, s.steps, s.size, s.tail, s.referred, s.inputs, s.sums,
-        s.variance, s.actions, s.utility, s.rel, s.time, s.nxt, s.prev, s.table, s.table_w,
-        s.floor, s.initial_utility, s.initial_reliability, s.discount, s.cutoff, s.rho,
-        s.decay, s.decided, s.eq7_scope, s.forgetting, eq7_signal(s, reward), s.eq7_walk,
-        s.cut_links)
-    s.steps += 1
-    s.pending = False
-    return True
-
-
-@njit(cache=True)
-def end_trial(s):
-    """A trial ends (ebrl.Agent.end_episode has the readings' meaning): the episode's
-    link is cut unless continuing, eq 7's starting point and its decided flags reset,
-    the recall table emptied unless kept; the next trial's first step noted
-    (recall_candidates "past")."""
-    if not s.continuing:
-        s.tail = -1
-    s.referred = -1
-    s.trial_start = s.steps
-    if s.flag_decisions:
-        s.decided[:] = False
-    if not s.keep_recall:
-        s.table[:] = -1

@@ -1,9 +1,10 @@
 """Named records for compiled code: numba structrefs defined once, built by name.
 
 A record is a mutable struct that compiled functions take as it is (numba's
-``structref``): the agent's state (ebrl.kernels.AgentRecord), a fallback's
-(ebrl.intrinsic.FallbackRecord), a drive's (tasks.*), the task's random stream
-(tasks.stream.Stream), the compiled loop's (experiments.running.fused.Sensing). Each is
+``structref``): the agent's state (ebrl.steps.AgentRecord), a fallback's
+(ebrl.intrinsic.FallbackRecord), a realisation's (tasks.kernels.steps.REALISATIONS),
+the task's random stream (tasks.kernels.stream.Stream), the compiled loop's
+(experiments.running.fused.Sensing). Each is
 declared as
 
     @records.record("buffer", "cursor", "has_gauss", "gauss")

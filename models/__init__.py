@@ -8,48 +8,16 @@ element names (``robot/base``, ``robot/hull``, ``robot/range_0`` ...). A robot f
 top-level bodies enter the room's world body directly, so a free joint is allowed.
 A new robot is a new XML file (here, or anywhere: see docs/adding_a_robot.md).
 
+Importing this package imports nothing heavy and changes nothing: MuJoCo is imported
+where a function needs it (tasks imports it first, with rendering off: tasks.gl).
+
 Contact bits, one per role (contype / conaffinity):
   walls and obstacles 1 / 1; robot bumpers 2 / 1 (they touch walls, never the floor);
   the floor 4 / 0; wheels, casters and skids 0 / 4 (they touch the floor, nothing else).
 """
-import contextlib
-import os
 import pathlib
-import sys
 
 import numpy as np
-
-
-@contextlib.contextmanager
-def _rendering_off():
-    """MUJOCO_GL=disabled for the duration, then as it was.
-
-    MuJoCo's Python package and dm_control load the OpenGL library that MUJOCO_GL names
-    when they are imported (EGL through Mesa brings its own LLVM, which crashes a process
-    that later loads torch's). They are imported here with rendering off, so a process
-    that never renders never loads an OpenGL library; tasks.render makes a context at the
-    first frame instead, with the backend MUJOCO_GL names then (or one it finds). A value
-    this package does not render with (glfw on a display, say) is left to them."""
-    wanted = os.environ.get("MUJOCO_GL")
-    if wanted not in (None, "", "egl", "osmesa"):
-        yield
-        return
-    os.environ["MUJOCO_GL"] = "disabled"
-    try:
-        yield
-    finally:
-        if wanted is None:
-            os.environ.pop("MUJOCO_GL", None)
-        else:
-            os.environ["MUJOCO_GL"] = wanted
-
-
-for _name in ("mujoco", "dm_control.mujoco"):  # each reads MUJOCO_GL once, at import
-    if _name not in sys.modules:
-        with _rendering_off():
-            __import__(_name)
-
-import mujoco  # noqa: E402
 
 #: Metres per paper unit for the paper's robots. A robot larger than the paper's may have
 #: its own (tasks.robots.Robot.unit, a mount's `unit`): the room, the start, the goal and
@@ -71,15 +39,15 @@ class ContractError(ValueError):
     """A robot file that lacks a part the naming contract asks for (docs/adding_a_robot.md);
     tasks.navigation reads the contract."""
 
-INTEGRATORS = {"Euler": mujoco.mjtIntegrator.mjINT_EULER,
-               "RK4": mujoco.mjtIntegrator.mjINT_RK4,
-               "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
-               "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST}
+#: The integrators a robot's entry may name (MuJoCo's mjtIntegrator, by its <option> name).
+INTEGRATORS = ("Euler", "RK4", "implicit", "implicitfast")
 
 
 def room_spec(room=None):
     """The room's MjSpec (a map's name, random:WxH:SEED, a map file or a rooms.Map; None:
     the paper's `sutton`), at the paper's unit; rooms.MapError for a bad map."""
+    import mujoco
+
     from models import rooms
     return mujoco.MjSpec.from_string(rooms.room_xml(room))
 
@@ -93,6 +61,7 @@ def compose(robot_file, *, timestep=None, integrator=None, unit=UNIT, robot=None
     (scale_room). robot: the robot's MjSpec, already made (a mount's); else the file's.
     room: the room (room_spec); None: the paper's.
     """
+    import mujoco
     path = pathlib.Path(robot_file)
     if not path.is_file():
         raise ValueError(f"no robot file at {path}")
@@ -113,7 +82,7 @@ def compose(robot_file, *, timestep=None, integrator=None, unit=UNIT, robot=None
     if integrator is not None:
         if integrator not in INTEGRATORS:
             raise ValueError(f"unknown integrator {integrator!r}; valid: {', '.join(INTEGRATORS)}")
-        room.option.integrator = INTEGRATORS[integrator]
+        room.option.integrator = getattr(mujoco.mjtIntegrator, "mjINT_" + integrator.upper())
     return room
 
 
@@ -138,6 +107,7 @@ def scale_room(room, unit):
 
 def unit_of(model):
     """Metres per paper unit of a composed model (an MjModel, or dm_control's wrapper)."""
+    import mujoco
     m = getattr(model, "ptr", model)
     i = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_NUMERIC, UNIT_NUMERIC)
     return UNIT if i < 0 else float(m.numeric_data[m.numeric_adr[i]])
@@ -145,6 +115,7 @@ def unit_of(model):
 
 def contract_names(model):
     """{contract name: the file's name} of a mounted model (tasks.mount); {} otherwise."""
+    import mujoco
     m = getattr(model, "ptr", model)
     i = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_TEXT, PREFIX + NAMES_TEXT)  # attached
     if i < 0:
@@ -161,6 +132,7 @@ def room_layout(model):
     the world's colliding boxes inside the field, as rectangles; start: (x, y, heading)
     of the start site. The room as simulated, so figures and the optimal path follow
     any room file."""
+    import mujoco
     unit = unit_of(model)
 
     def rect(pos, size):
@@ -182,6 +154,7 @@ def room_layout(model):
 
 def _planar_axis(quat):
     """The x axis of a frame with orientation quat, in the plane: (cos, sin)."""
+    import mujoco
     mat = np.zeros(9)
     mujoco.mju_quat2Mat(mat, np.asarray(quat, dtype=np.float64))
     return mat[0], mat[3]

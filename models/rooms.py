@@ -46,7 +46,7 @@ RANDOM = re.compile(r"random:(\d+)x(\d+):(\d+)$")
 #: The random mazes' sizes, in inner cells.
 RANDOM_SIZES = (3, 31)
 #: A room's widest side in units: runs store positions as int16 hundredths of a unit
-#: (experiments.running.protocol.TRACE_SCALE), at most 327.67.
+#: (experiments.running.execution.TRACE_SCALE), at most 327.67.
 MAX_EXTENT = 320.0
 WALL, FREE, START, GOAL = "*", " ", "P", "G"
 
@@ -96,6 +96,15 @@ class Map:
     @property
     def goal(self):
         return self.cell_of(GOAL)
+
+    @property
+    def start_heading(self) -> float:
+        """The start's heading (rad): towards its first open neighbour of east, north,
+        west, south."""
+        sc, sr = self.start
+        return next((a for a, (dc, dr) in zip((0.0, np.pi / 2, np.pi, -np.pi / 2),
+                                              ((1, 0), (0, 1), (-1, 0), (0, -1)))
+                     if not self.wall(sc + dc, sr + dr)), 0.0)
 
     def text(self) -> str:
         return f"# cell {self.cell:g}\n" + "\n".join(self.rows) + "\n"
@@ -317,6 +326,21 @@ def _vec(*values):
 
 
 @functools.lru_cache(maxsize=64)
+def layout(room=None):
+    """(field, obstacles, goal, start) of a room, in paper units, from its Map: field and
+    goal (x0, x1, y0, y1), the merged inner walls as rectangles (merged_walls' order),
+    the start (x, y, heading) at its cell's centre. What room_xml builds the room from,
+    so figures and the optimal path draw the room the robots run in without compiling
+    it (models.room_layout reads a compiled room back, as the task's Physics does)."""
+    m = load(room)
+    c = m.cell
+    walls = [(c0 * c, c1 * c, r0 * c, r1 * c) for c0, c1, r0, r1 in merged_walls(m)]
+    (gc, gr), (sc, sr) = m.goal, m.start
+    return ((0.0, m.width * c, 0.0, m.height * c), walls,
+            (gc * c, (gc + 1) * c, gr * c, (gr + 1) * c),
+            ((sc + 0.5) * c, (sr + 0.5) * c, m.start_heading))
+
+
 def room_xml(room=None) -> str:
     """The room's MJCF, at the paper's unit (models.UNIT metres per paper unit;
     models.scale_room scales it for a robot of another unit)."""
@@ -339,9 +363,7 @@ def room_xml(room=None) -> str:
         f'    <geom name="{name}" class="{cls}" pos="{_vec(*pos, half)}"'
         f' size="{_vec(*size, half)}"/>' for name, cls, pos, size in walls)
     (gc, gr), (sc, sr) = m.goal, m.start
-    heading = next((a for a, (dc, dr) in zip((0.0, np.pi / 2, np.pi, -np.pi / 2),
-                                             ((1, 0), (0, 1), (-1, 0), (0, -1)))
-                    if not m.wall(sc + dc, sr + dr)), 0.0)
+    heading = m.start_heading
     orient = "" if heading == 0.0 else f' euler="0 0 {_f(heading)}"'
     texrepeat = _vec(m.width * m.cell / CELL, m.height * m.cell / CELL)
     goal = (f'pos="{_vec((gc + 0.5) * cell, (gr + 0.5) * cell, 0.002)}" '

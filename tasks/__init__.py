@@ -5,25 +5,32 @@ robot file with `drive="two_wheel"` or `drive="floating"`.
 """
 from __future__ import annotations
 
+import copy
 import dataclasses
+import functools
+import hashlib
 import os
 
-import models  # first: it imports MuJoCo and dm_control with rendering off (tasks.render)
-from models import rooms
+from tasks import gl
 
-import dm_env
-import mujoco
-import numpy as np
-from dm_control.mujoco import wrapper
-from dm_control.rl import control
+gl.import_simulator()  # first: MuJoCo and dm_control with rendering off (tasks.gl)
 
-from tasks import navigation, render
-from tasks.config import TaskConfig
-from tasks.realisations import REALISATIONS
-from tasks.robots import DRIVES, MOUNTS, PAPER_ROBOTS, ROBOTS, Robot, resolve
+import dm_env  # noqa: E402
+import mujoco  # noqa: E402
+import numpy as np  # noqa: E402
+from dm_control.mujoco import wrapper  # noqa: E402
+from dm_control.rl import control  # noqa: E402
 
-__all__ = ["load", "compile_robot", "TaskConfig", "ROBOTS", "MOUNTS", "PAPER_ROBOTS", "DRIVES", "Robot",
-           "resolve", "REALISATIONS"]
+import models  # noqa: E402
+from models import rooms  # noqa: E402
+
+from tasks import navigation, render  # noqa: E402
+from tasks.config import TaskConfig  # noqa: E402
+from tasks.realisations import REALISATIONS  # noqa: E402
+from tasks.robots import DRIVES, MOUNTS, PAPER_ROBOTS, ROBOTS, Robot, resolve  # noqa: E402
+
+__all__ = ["load", "compile_robot", "compiled_model", "TaskConfig", "ROBOTS", "MOUNTS",
+           "PAPER_ROBOTS", "DRIVES", "Robot", "resolve", "REALISATIONS"]
 
 
 class Environment(control.Environment):
@@ -75,14 +82,16 @@ def compile_robot(entry: Robot, config: TaskConfig = TaskConfig(),
                   room=None) -> tuple[mujoco.MjModel, mujoco.MjSpec]:
     """(MjModel, MjSpec) of the room with the registry entry's robot, and the task
     config's changes to the model: the robot's radius, the floating bump's walls.
-    room: a map's name, random:WxH:SEED or a map file (models.rooms); None: the paper's.
-    rooms.MapError when the map is bad or its corridors are narrower than the robot."""
+    room: a map's name, random:WxH:SEED, a map file or a rooms.Map (models.rooms); None:
+    the paper's. rooms.MapError when the map is bad or its corridors are narrower than
+    the robot."""
     robot = None
     if entry.mount is not None:
         from tasks import mount
         robot = mount.robot_spec(entry.mount)
+    layout = rooms.load(room)
     spec = models.compose(entry.model, timestep=entry.timestep, integrator=entry.integrator,
-                          unit=entry.unit, robot=robot, room=room)
+                          unit=entry.unit, robot=robot, room=layout)
     REALISATIONS[entry.realisation].task_class().edit_model(spec, config)
     try:
         model = spec.compile()
@@ -92,8 +101,19 @@ def compile_robot(entry: Robot, config: TaskConfig = TaskConfig(),
     if room is not None:
         radius = navigation.robot_radius(model) if navigation.named_id(
             model, mujoco.mjtObj.mjOBJ_GEOM, "hull") >= 0 else 0.0
-        rooms.check_fits(rooms.load(room), radius)
+        rooms.check_fits(layout, radius)
     return model, spec
+
+
+@functools.lru_cache(maxsize=16)
+def compiled_model(entry: Robot, config: TaskConfig = TaskConfig(),
+                   room=None) -> tuple[mujoco.MjModel, str]:
+    """(MjModel, digest): compile_robot's model, compiled once per process for these
+    arguments, and a digest of its MJCF (sha256 of the spec's XML, 16 hex digits: what a
+    run records, so results made with another model never match). tasks.load runs on a
+    copy of the model; never change the one returned."""
+    model, spec = compile_robot(entry, config, room)
+    return model, hashlib.sha256(spec.to_xml().encode()).hexdigest()[:16]
 
 
 def _source(entry):
@@ -111,7 +131,7 @@ def load(robot: str | os.PathLike | Robot, *, drive: str | None = None, seed: in
     `sutton`); fields: TaskConfig fields to change (sensor_noise=0.0, bump="slide", ...)."""
     entry = robot if isinstance(robot, Robot) else resolve(robot, drive)
     config = dataclasses.replace(config or entry.task_config(), **fields)
-    model, _ = compile_robot(entry, config, room)
+    model = copy.copy(compiled_model(entry, config, room)[0])
     realisation = REALISATIONS[entry.realisation]
     task_cls = realisation.task_class()
     physics_cls = realisation.physics(**(entry.mount.action.physics_attributes()

@@ -16,15 +16,14 @@ import dataclasses
 import pathlib
 from typing import TYPE_CHECKING
 
+from models import MODEL_DIR, UNIT
+from tasks.protocols import PROTOCOLS
+
 if TYPE_CHECKING:
     from tasks.mount import Mount
 
-MODEL_DIR = pathlib.Path(__file__).resolve().parents[1] / "models"
 #: The shipped mounts (tasks.mount): third-party robot files, unchanged, by name.
 MOUNT_DIR = MODEL_DIR / "mounts"
-#: Metres per paper unit of the paper's robots (models.UNIT; repeated here so that this
-#: module imports nothing heavy).
-PAPER_UNIT = 0.1
 
 
 @dataclasses.dataclass(frozen=True)
@@ -35,87 +34,14 @@ class Drive:
     budget: int        # Section 3.6: agent steps of learning per run
     avoidance: str     # Section 3.4's intrinsic behaviour, by equation ("eq8", "eq9-10")
     modalities: tuple  # (observation key, eq 3 weight) pairs, in the agent's input order
-    #: This replication's readings of what the paper leaves open, where they differ from
-    #: the fields' defaults (ebrl.Config, tasks.TaskConfig), as (field, value) pairs: the
-    #: agent's and the drive's interface (its action noise, its velocity sensing).
-    #: docs/interpretation.md, "The adopted readings", gives the evidence.
-    readings: tuple = ()
 
-
-#: Protocol 6's learner: one set for both drives, as Table 1 gives one learner (all but
-#: the memory size). The policy threshold is fitted: 0.3 of 0, 0.05, 0.2, 0.3 and 0.4 on
-#: seeds 300-349 (two-wheel) and 300-329 (floating), by the figures within 1.5x and the
-#: claims held over both robots (docs/interpretation.md, "The adopted readings (protocol
-#: 6)"); every other learner reading is the default.
-LEARNER = (("policy_threshold", 0.3),)
 
 DRIVES = {
-    # Protocol 6 (docs/interpretation.md, "The adopted readings (protocol 6)"): the learner
-    # (LEARNER); the 20% random action Section 3.4's Gaussian, the random walk's demand
-    # uniform (the one open random demand); stage 1's fallback and body readings
-    # (`ebrl fit --stage first-trial`, docs/fit_first_trial_two_wheel.md, trial 6 less its
-    # blocked_move=refuse).
     "two_wheel": Drive("two_wheel", table1="T", budget=30_000, avoidance="eq8",
-                       modalities=(("range", 1.0),),
-                       readings=LEARNER + (("random_demand", "uniform_walk"),
-                                           ("random_in_avoidance", "add"),
-                                           ("leftover_turn", "away"))),
-    # The learner (LEARNER); the random demands as the two-wheel drive's; stage 1's
-    # fallback and action readings (docs/fit_first_trial_floating.md, trial 9); eq 9's
-    # dead zone and the velocity sensor's readings from `ebrl fit`'s trial 126 (protocol 4,
-    # study fit150, RESULTS.md "Search"), as searched.
+                       modalities=(("range", 1.0),)),
     "floating": Drive("floating", table1="F", budget=100_000, avoidance="eq9-10",
-                      modalities=(("range", 0.7), ("velocity", 0.3)),
-                      readings=LEARNER + (("eq9_dead_zone", "keep"),
-                                          ("random_demand", "uniform_walk"),
-                                          ("random_in_avoidance", "replace"),
-                                          ("action_noise", 0.17273080599893353),
-                                          ("velocity_noise", 0.06931187891441754),
-                                          ("velocity_code", "code"))),
+                      modalities=(("range", 0.7), ("velocity", 0.3))),
 }
-
-
-#: The named protocols a run can take (`ebrl run --protocol`): "adopted", each robot's
-#: readings as its entry below gives them (the drive's, then its own: PROTOCOL_VERSION's
-#: readings); "literal", the paper as written (LITERAL).
-PROTOCOLS = ("adopted", "literal")
-
-#: The literal protocol: every value the paper states is the paper's, and every detail it
-#: leaves open takes its plainest reading, one listing for every robot (a reading acts
-#: where it applies: tasks.readings.applies). Chosen and written down, each with its
-#: reason (docs/interpretation.md, "The literal protocol"), before any run of it was
-#: looked at; every reading of the registry is listed (tests/test_robots.py).
-LITERAL = (
-    # the learner (Sections 2 and 3.4)
-    ("policy_threshold", 0.0),       # "enough value": any measure above nothing
-    ("initial_reliability", 1.0),    # a new memory as reliable as any, decaying from there
-    ("initial_utility", 0.0),        # no reward seen yet
-    ("utility_cutoff", 0.0),         # eq 6 as printed: the whole episode, no cutoff
-    ("variance_floor", 1e-6),        # a numerical guard only (V_i = 0 divides by zero)
-    ("episode", "trial"),
-    ("recall_at_trial_end", "empty"),
-    ("eq7_scope", "to_start"),       # "following the backward links"
-    ("forgetting", "least_reliable"),  # stated, Section 2.1
-    ("eq9_dead_zone", "keep"),       # eq 9's a_h "not changed": it keeps its value
-    ("random_in_avoidance", "replace"),  # "some probability of random action"
-    ("random_demand", "gaussian"),   # stated, Section 3.4, for every random action
-    ("eq7_signal", "reward"),        # eq 7 as printed: r_t is the reward
-    ("eq7_walk", "whole"),
-    ("forgetting_link", "join"),
-    ("recall_candidates", "all"),
-    ("exploration", "fallback"),     # 2.3: "random or intrinsic behavior"
-    # the body (Section 3.3)
-    ("action_noise", 0.05),          # stated for the two wheels robot; the same for both
-    ("bump", "stop"),                # "moves ... until it bumps": the motion stops there
-    ("radius", None),                # the robot file's (1.5 for the paper's robots)
-    ("thrust", "scaled"),            # stated maximum 0.2: a demand of 1 is 0.2
-    ("wall_friction", None),
-    ("restitution", 1.0),
-    ("velocity_noise", 0.0),         # "it can also detect the velocity": as it is
-    ("velocity_code", "none"),
-    ("blocked_move", "stop"),        # stated: "the rest portion of move is transferred"
-    ("leftover_turn", "commanded"),
-)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -134,17 +60,23 @@ class Robot:
     budget: int = None
     avoidance: str = None
     modalities: tuple = None
-    #: (field, value) pairs on top of the drive's readings (Drive.readings): the body's.
-    readings: tuple = ()
+    #: The robot's own readings, (field, value) pairs (a mount's [readings] table), on top
+    #: of its protocol's.
+    own_readings: tuple = ()
     description: str = ""
     #: Metres per paper unit: the room, the start, the goal and the beams' range scale
     #: with it (models.compose); every distance the task reports stays in paper units.
-    unit: float = PAPER_UNIT
+    unit: float = UNIT
     #: The mount that enters a file not of the naming contract.
     mount: "Mount | None" = None
     #: `ebrl check`'s accuracy limits where the drive's 5% is not asked of the body (a
     #: mount's [check]), as (error, limit) pairs.
     accuracy_limits: tuple = ()
+    #: The protocol whose readings the entry takes (a name of tasks.protocols.PROTOCOLS).
+    protocol: str = "adopted"
+    #: Its readings, (field, value) pairs, sorted: the protocol's for it, then its own
+    #: (tasks.protocols.Protocol.readings_for).
+    readings: tuple = dataclasses.field(init=False)
 
     def __post_init__(self):
         if self.drive not in DRIVES:
@@ -154,19 +86,16 @@ class Robot:
             if getattr(self, field) is None:
                 object.__setattr__(self, field, getattr(d, field))
         object.__setattr__(self, "model", pathlib.Path(self.model))
-        merged = dict(d.readings) | dict(self.readings)
-        object.__setattr__(self, "readings", tuple(sorted(merged.items())))
+        if self.protocol not in PROTOCOLS:
+            raise ValueError(f"unknown protocol {self.protocol!r}; valid: {', '.join(PROTOCOLS)}")
+        object.__setattr__(self, "readings", PROTOCOLS[self.protocol].readings_for(
+            self.name, self.drive, self.own_readings))
         if self.realisation is None:
             object.__setattr__(self, "realisation", file_realisation(self.model, self.drive))
 
     def under(self, protocol):
-        """This entry under a named protocol (PROTOCOLS): itself for "adopted"; for
-        "literal", with every reading LITERAL's."""
-        if protocol == "adopted":
-            return self
-        if protocol != "literal":
-            raise ValueError(f"unknown protocol {protocol!r}; valid: {', '.join(PROTOCOLS)}")
-        return dataclasses.replace(self, readings=LITERAL)
+        """This entry under a named protocol (tasks.protocols.PROTOCOLS)."""
+        return self if protocol == self.protocol else dataclasses.replace(self, protocol=protocol)
 
     def task_config(self, **overrides):
         """tasks.TaskConfig with this robot's task readings, then the overrides."""
@@ -187,13 +116,8 @@ class Robot:
 
 ROBOTS = {r.name: r for r in (
     Robot("two_wheel", MODEL_DIR / "two_wheel.xml", "two_wheel", "servos",
-          # the body's reading from stage 1 (trial 6): a smaller robot than its file's 1.5
-          readings=(("radius", 1.366638388002404),),
           description="the paper's two-wheel robot as a planar base (slide x, y, hinge yaw)"),
     Robot("floating", MODEL_DIR / "floating.xml", "floating", "thrusters",
-          # the body's readings from stage 1 (trial 9): the literal wall ("moves ... until
-          # it bumps": stopped at the bump), a larger puck than its file's 1.5
-          readings=(("bump", "stop"), ("radius", 2.477124155927907)),
           description="the paper's floating robot as a planar puck (slide x, y)"),
     Robot("diff_drive", MODEL_DIR / "diff_drive.xml", "two_wheel", "wheels", timestep=0.025,
           integrator="Euler", time_scale=2.5,
@@ -250,7 +174,7 @@ def _mounted(path):
         m = mount.parse(path)
         _MOUNTED[key] = Robot(m.name, m.model, m.drive, m.action.realisation(m.drive),
                               unit=m.unit, time_scale=m.time_scale,
-                              readings=m.readings, accuracy_limits=m.check,
+                              own_readings=m.readings, accuracy_limits=m.check,
                               description=m.description or f"mounted from {m.file}",
                               mount=m, **_mount_options(m))
     return _MOUNTED[key]

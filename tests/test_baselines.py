@@ -8,8 +8,8 @@ import pytest
 
 from ebrl import intrinsic
 from ebrl.baselines import (AGENTS, MFEC, MFECConfig, QTable, QTableConfig, boltzmann,
-                            confidence, discounted_returns, discrete_actions,
-                            knn_estimates, nearest_action, store_trial)
+                            confidence, discounted_returns, discrete_actions, nearest_action)
+from ebrl.baselines.mfec import knn_estimates, store_trial
 
 R = math.sqrt(0.5)
 FLOATING = dict(groups=[np.arange(8), np.arange(8, 10)], group_weights=[0.7, 0.3])
@@ -392,15 +392,15 @@ def test_configs_are_numbers_for_set(name):
 def test_a_baseline_runs_the_drives_intrinsic_behaviour(name):
     """The fallback's readings of a drive (tasks.robots) reach every learner: a baseline's
     first trial, before any reward, is EBRL's on the same seed, bit for bit."""
-    from experiments.running import protocol
+    from experiments.running import execution
     # seeds whose first goal comes early (tests/test_first_trial.py)
     for robot, condition, seed in (("floating", "avoidance", 319), ("two_wheel", "random", 32)):
-        ebrl_spec = protocol.RunSpec(robot, condition, seed, 1000, first_trial=True)
-        mine = protocol.RunSpec(robot, condition, seed, 1000, agent=name, first_trial=True)
+        ebrl_spec = execution.RunSpec(robot, condition, seed, 1000, first_trial=True)
+        mine = execution.RunSpec(robot, condition, seed, 1000, agent=name, first_trial=True)
         a, b = ebrl_spec.agent_config(), mine.agent_config()
         for k in ("eq9_dead_zone", "random_in_avoidance", "random_demand"):
             assert getattr(a, k) == getattr(b, k), k
-        ours, theirs = protocol.execute(ebrl_spec), protocol.execute(mine)
+        ours, theirs = execution.execute(ebrl_spec), execution.execute(mine)
         assert ours["trial_ends"].tolist() == theirs["trial_ends"].tolist() != []
         assert ours["trace"].tobytes() == theirs["trace"].tobytes()
 

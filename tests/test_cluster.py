@@ -71,7 +71,7 @@ def claimant(url, name, procs):
         s = load(url, name)
     except KeyError:  # the study not made yet
         return None
-    pids = {t.system_attrs.get(study.WORKER, {}).get("pid") for t in s.get_trials(
+    pids = {t.system_attrs.get(study.storage.WORKER, {}).get("pid") for t in s.get_trials(
         deepcopy=False, states=(optuna.trial.TrialState.RUNNING,))}
     return next((p for p in procs if p.pid in pids), None)
 

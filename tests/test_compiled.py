@@ -153,11 +153,11 @@ def test_a_folder_that_cannot_be_written_caches_elsewhere_still_keyed(tmp_path):
 #: it: cut to half its length ("truncated") or gone while its index names it ("missing").
 PROBE = textwrap.dedent("""\
     import hashlib, pathlib, shutil, sys
-    from ebrl import kernels
-    from experiments.running import fused, protocol, runner
+    from ebrl import steps
+    from experiments.running import fused, execution, runner
     from tasks.kernels import body
     folders = {}
-    for kernel in (kernels.learn_step, body.base_pose, fused.run):
+    for kernel in (steps.learn_step, body.base_pose, fused.run):
         folder = folders[kernel.py_func.__module__.rpartition(".")[2]] = pathlib.Path(
             kernel.stats.cache_path)
         source = pathlib.Path(kernel.py_func.__code__.co_filename).parent / "__pycache__"
@@ -175,7 +175,7 @@ PROBE = textwrap.dedent("""\
                 path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
             print(name, path)
     spec = runner.plan(["two_wheel"], ["avoidance"], [0], 600)[0]
-    result = protocol.execute(spec)
+    result = execution.execute(spec)
     digest = hashlib.sha256()
     for key in ("trial_ends", "trace", "starts"):
         digest.update(result[key].tobytes())
@@ -200,7 +200,7 @@ def _probe(env, *damage):
 def test_the_agents_the_tasks_and_the_loops_damaged_entries_mend_with_the_same_bits(tmp_path):
     """In real processes on a copy of the checkout's cache (NUMBA_CACHE_DIR): the loop
     (experiments/running/fused.py) with its data file cut to half (issue 40's case: every
-    run failed, UnpicklingError), the agent's learn_step (ebrl/kernels.py) with its data
+    run failed, UnpicklingError), the agent's learn_step (ebrl/steps.py) with its data
     file missing, the task's base_pose (tasks/kernels/body.py) with its index cut to half.
     The loop compiles again, reading the other two as it does: a warning line for each,
     the run's bits unchanged, and the next process loads all from the rebuilt cache,
@@ -209,14 +209,14 @@ def test_the_agents_the_tasks_and_the_loops_damaged_entries_mend_with_the_same_b
     (_, expected, _), _ = _probe(plain)  # the checkout's own cache (compiled if cold)
     copy = dict(plain, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
     (damaged, digest, hits), err = _probe(copy, "fused.run:data:truncated",
-                                          "kernels.learn_step:data:missing",
+                                          "steps.learn_step:data:missing",
                                           "body.base_pose:index:truncated")
     assert digest == expected and hits == 0
     truncated = "(UnpicklingError: pickle data was truncated)"
     warned = err.strip().splitlines()
     assert len(warned) == 3, err  # one line per damaged kernel, naming the file it read
     for name, why in (("fused.run", truncated), ("body.base_pose", truncated),
-                      ("kernels.learn_step", None)):
+                      ("steps.learn_step", None)):
         lines = [line for line in warned if any(f" {path} could" in line for path in damaged[name])]
         assert len(lines) == 1, (name, err)
         path = lines[0].split("numba cache file ", 1)[1].split(" could not be read", 1)[0]

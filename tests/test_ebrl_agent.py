@@ -126,12 +126,12 @@ def test_kernels_are_compiled_once_and_cached():
         assert d.stats.cache_path is not None, d.__name__  # numba's NullCache: None
         assert not d.targetoptions.get("fastmath") and not d.targetoptions.get("parallel")
     code = ("import numpy as np, ebrl\n"
-            "from ebrl import kernels\n"
+            "from ebrl import kernels, steps\n"
             "ag = ebrl.Agent(ebrl.Config(memory_size=8, recall_size=2), 3, 1,\n"
             "                ebrl.intrinsic.RandomWalk(1), seed=0)\n"
             "for t in range(20):\n"
             "    ag.act(np.random.default_rng(t).random(3)); ag.learn(float(t % 5 == 4), t % 5 == 4)\n"
-            "ds = [v for v in vars(kernels).values() if hasattr(v, 'py_func')]\n"
+            "ds = [v for m in (kernels, steps) for v in vars(m).values() if hasattr(v, 'py_func')]\n"
             "print(sum(len(d.stats.cache_misses) for d in ds), sum(len(d.stats.cache_hits) for d in ds))\n")
     for _ in range(2):
         out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

@@ -14,7 +14,7 @@ import pytest
 from ebrl import behaviour as genomes
 from ebrl import intrinsic
 from experiments.studies import evolve, study
-from experiments.running import protocol
+from experiments.running import execution
 from helpers import ROOT, ebrl
 
 PAPER_FILES = {"eq8": ROOT / "behaviours" / "paper_eq8.json",
@@ -34,7 +34,7 @@ def test_paper_files_are_the_papers_rules_and_current():
             "evolve.write_paper(\"behaviours\")'")
         g = genomes.load(path)
         assert g == expected and genomes.is_paper_rule(g)
-        config = protocol.RunSpec(robot, "avoidance", 0, 1).agent_config()
+        config = execution.RunSpec(robot, "avoidance", 0, 1).agent_config()
         assert g.initial_reliability == config.initial_reliability
     t = genomes.load(PAPER_FILES["eq8"])
     assert t.weights == (1 / 6, 2 / 6, 3 / 6, 0.0, -3 / 6, -2 / 6, -1 / 6)  # i / sum(i), mirrored
@@ -131,7 +131,7 @@ def test_random_share_and_spread_and_learning_variables():
     # The learning variables' initial values and the random action reach the agent's config.
     g = dataclasses.replace(g, initial_reliability=0.3, initial_utility=0.25, random_rate=0.1,
                             random_sd=0.7)
-    config = protocol.RunSpec("two_wheel", "avoidance", 0, 10, behaviour=g).agent_config()
+    config = execution.RunSpec("two_wheel", "avoidance", 0, 10, behaviour=g).agent_config()
     assert (config.initial_reliability, config.initial_utility) == (0.3, 0.25)
     assert (config.intrinsic_random_rate, config.random_sd) == (0.1, 0.7)
 
@@ -145,17 +145,17 @@ def test_the_paper_files_reproduce_the_default_runs_bit_for_bit(robot):
     from tasks.robots import ROBOTS
     genome = genomes.load(PAPER_FILES[ROBOTS[robot].avoidance])
     for condition in ("random", "avoidance"):
-        default = protocol.execute(protocol.RunSpec(robot, condition, 3, STEPS))
-        mine = protocol.execute(protocol.RunSpec(robot, condition, 3, STEPS, behaviour=genome))
+        default = execution.execute(execution.RunSpec(robot, condition, 3, STEPS))
+        mine = execution.execute(execution.RunSpec(robot, condition, 3, STEPS, behaviour=genome))
         assert mine["trace"].tobytes() == default["trace"].tobytes(), condition
         assert mine["trial_ends"].tolist() == default["trial_ends"].tolist()
         assert mine["memory_decisions"] == default["memory_decisions"]
     if robot == "floating":  # the floating robot's reading "keep" is hold 1 (its file's);
         # hold 0 is the reading "zero", bit for bit
         assert genome.hold == 1.0
-        zero = protocol.execute(protocol.RunSpec(robot, "avoidance", 3, STEPS,
+        zero = execution.execute(execution.RunSpec(robot, "avoidance", 3, STEPS,
                                                  (("eq9_dead_zone", "zero"),)))
-        dropped = protocol.execute(protocol.RunSpec(robot, "avoidance", 3, STEPS,
+        dropped = execution.execute(execution.RunSpec(robot, "avoidance", 3, STEPS,
                                                     behaviour=dataclasses.replace(genome, hold=0.0)))
         assert dropped["trace"].tobytes() == zero["trace"].tobytes()
         assert dropped["trace"].tobytes() != default["trace"].tobytes()

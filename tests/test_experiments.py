@@ -353,8 +353,8 @@ def test_sweep_table_takes_the_default_rows_from_a_baseline_run(clean_run, tmp_p
     table = (tmp_path / "sweeps" / "SWEEP.md").read_text()
     base = summary(clean_run)["groups"]
     goals = next(g for g in base if (g["robot"], g["condition"]) == ("two_wheel", "avoidance"))["goals"]
-    from tasks.robots import LEARNER
-    default = f"| {dict(LEARNER)['policy_threshold']} (default"   # protocol 6's
+    from tasks.protocols import ADOPTED
+    default = f"| {dict(ADOPTED.readings)['policy_threshold']} (default"   # the adopted protocol's
     row = next(line for line in table.splitlines() if line.startswith(default))
     assert row.endswith(f"| {goals['min']} / {goals['median']:.1f} |")
     assert table.index(default) < table.index("| 0.4 |")
@@ -413,12 +413,12 @@ def test_intrinsic_parameters_reach_the_fallback():
     """--set intrinsic_random_rate / random_sd must change the behaviour a run uses."""
     import tasks
     from ebrl import intrinsic
-    from experiments.running import protocol
+    from experiments.running import execution
     env = tasks.load("two_wheel", seed=0)
     try:
-        spec = protocol.RunSpec("two_wheel", "avoidance", 0, 100,
+        spec = execution.RunSpec("two_wheel", "avoidance", 0, 100,
                                 overrides=(("intrinsic_random_rate", 0.0), ("random_sd", 0.1)))
-        fb = protocol.make_agent(spec, env).fallback
+        fb = execution.make_agent(spec, env).fallback
         assert (fb.random_rate, fb.sd) == (0.0, 0.1)
         rng = np.random.default_rng(0)
         readings = np.array([1.0, 0, 0, 0, 0, 0, 0])

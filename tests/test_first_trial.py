@@ -1,12 +1,12 @@
-"""First-trial runs (protocol.RunSpec.first_trial, `ebrl run --first-trial`): the one trial
-loop (protocol.Trials) stops at the first goal; the trial is a full run's, bit for bit."""
+"""First-trial runs (execution.RunSpec.first_trial, `ebrl run --first-trial`): the one trial
+loop (execution.Trials) stops at the first goal; the trial is a full run's, bit for bit."""
 import csv
 import dataclasses
 import json
 
 import pytest
 
-from experiments.running import protocol, results, runner
+from experiments.running import execution, results, runner
 
 # Seeds whose first trial ends well inside a short budget (protocol 6's first trials: the
 # ablation's seeds 300-349 for the avoidance condition, protocol 5's runs of seeds 0-49 for
@@ -18,8 +18,8 @@ CASES = [("two_wheel", "avoidance", 310, 1500), ("two_wheel", "random", 32, 1500
 
 @pytest.mark.parametrize("robot,condition,seed,steps", CASES)
 def test_a_first_trial_run_is_a_full_runs_first_trial(robot, condition, seed, steps):
-    full = protocol.execute(protocol.RunSpec(robot, condition, seed, steps))
-    first = protocol.execute(protocol.RunSpec(robot, condition, seed, steps, first_trial=True))
+    full = execution.execute(execution.RunSpec(robot, condition, seed, steps))
+    first = execution.execute(execution.RunSpec(robot, condition, seed, steps, first_trial=True))
     end = int(full["trial_ends"][0])
     assert end < steps  # the full run goes on after it; the first-trial run stops
     assert first["trial_ends"].tolist() == [end]
@@ -28,36 +28,36 @@ def test_a_first_trial_run_is_a_full_runs_first_trial(robot, condition, seed, st
     assert first["trace"].tobytes() == full["trace"][:end + 1].tobytes()
     # the reset after the goal is the full run's too: the next start is the same
     assert first["starts"].tobytes() == full["starts"][:2].tobytes()
-    assert protocol.metrics(first["trial_ends"])["first_trial_steps"] == \
-        protocol.metrics(full["trial_ends"])["first_trial_steps"]
+    assert execution.metrics(first["trial_ends"])["first_trial_steps"] == \
+        execution.metrics(full["trial_ends"])["first_trial_steps"]
 
 
 def test_the_step_by_step_loop_stops_at_the_same_step():
     """fused=False (Agent.act, Environment.step, Agent.learn) stops where the compiled
     stretches stop, with the same trace."""
-    spec = protocol.RunSpec("two_wheel", "avoidance", 310, 1500, first_trial=True)
-    stepwise, compiled = protocol.execute(spec, fused=False), protocol.execute(spec)
+    spec = execution.RunSpec("two_wheel", "avoidance", 310, 1500, first_trial=True)
+    stepwise, compiled = execution.execute(spec, fused=False), execution.execute(spec)
     assert stepwise["trial_ends"].tolist() == compiled["trial_ends"].tolist() == [90]
     assert stepwise["trace"].tobytes() == compiled["trace"].tobytes()
 
 
 def test_a_first_trial_without_a_goal_runs_its_budget():
     """two_wheel random seed 2 reaches no goal in 300 steps: the run is the full run."""
-    full = protocol.execute(protocol.RunSpec("two_wheel", "random", 2, 300))
-    first = protocol.execute(protocol.RunSpec("two_wheel", "random", 2, 300, first_trial=True))
+    full = execution.execute(execution.RunSpec("two_wheel", "random", 2, 300))
+    first = execution.execute(execution.RunSpec("two_wheel", "random", 2, 300, first_trial=True))
     assert full["trial_ends"].tolist() == first["trial_ends"].tolist() == []
     assert first["steps_run"] == 300
     assert first["trace"].tobytes() == full["trace"].tobytes()
 
 
 def test_a_first_trial_run_has_its_own_folder_and_parameters(tmp_path):
-    spec = protocol.RunSpec("floating", "avoidance", 319, 1000, first_trial=True)
+    spec = execution.RunSpec("floating", "avoidance", 319, 1000, first_trial=True)
     full_spec = dataclasses.replace(spec, first_trial=False)
     assert spec.label == "floating.first_trial" and full_spec.label == "floating"
     assert spec.parameters()["first_trial"] is True
     assert "first_trial" not in full_spec.parameters()  # full runs' parameters as before
     assert results.run_dir(tmp_path, spec) != results.run_dir(tmp_path, full_spec)
-    results.write_run(tmp_path, spec, protocol.execute(spec), {})
+    results.write_run(tmp_path, spec, execution.execute(spec), {})
     assert results.existing(tmp_path, spec) == "done"
     assert results.existing(tmp_path, full_spec) == "missing"
     folder = results.run_dir(tmp_path, spec)

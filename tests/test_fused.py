@@ -3,16 +3,16 @@ import numpy as np
 import pytest
 
 import tasks
-from experiments.running import fused, protocol
+from experiments.running import fused, execution
 
 
 def _pair(robot, condition, seed=0):
-    spec = protocol.RunSpec(robot, condition, seed, 10)
-    env_seed, _ = protocol.seeds_for(seed)
+    spec = execution.RunSpec(robot, condition, seed, 10)
+    env_seed, _ = execution.seeds_for(seed)
     out = []
     for _ in range(2):
         env = tasks.load(spec.entry, seed=env_seed, config=spec.task_config())
-        out.append((env, protocol.make_agent(spec, env)))
+        out.append((env, execution.make_agent(spec, env)))
     return spec, out
 
 
@@ -42,15 +42,15 @@ def _state(env, agent):
     # the mounts' own drives: the car's motors, the Ant's gait, the point mass's thrusters
     ("car", 400, "avoidance"), ("ant", 30, "random"), ("point_mass", 600, "avoidance")])
 def test_a_stretch_is_the_step_by_step_loop(robot, steps, condition):
-    """protocol.Trials step by step (Agent.act, Environment.step, Agent.learn) against
+    """execution.Trials step by step (Agent.act, Environment.step, Agent.learn) against
     the compiled stretches over the same functions, in stretches of at most 700 steps
     (a stretch also resumes where one stopped), run in two halves (a loop resumes)."""
     # floating seed 300 reaches the goal early in both conditions (protocol 6: steps 1,880
     # and 905)
     spec, ((env1, agent1), (env2, agent2)) = _pair(robot, condition, 300 if robot == "floating" else 0)
     keys = tuple(k for k, _ in spec.entry.modalities)
-    one = protocol.Trials(env1, agent1, keys, steps, fused=False)
-    two = protocol.Trials(env2, agent2, keys, steps, stretch=700)
+    one = execution.Trials(env1, agent1, keys, steps, fused=False)
+    two = execution.Trials(env2, agent2, keys, steps, stretch=700)
     assert two.fused and not one.fused
     for t in (one, two):
         t.run(steps // 2).run(steps - steps // 2)
@@ -68,8 +68,8 @@ def test_a_stretch_is_the_step_by_step_loop(robot, steps, condition):
 def test_runs_are_the_same_fused_or_not_and_reach_the_goal():
     for robot, condition, seed, steps in (("two_wheel", "avoidance", 1, 12_000),
                                           ("floating", "random", 300, 8000)):
-        spec = protocol.RunSpec(robot, condition, seed, steps)
-        a, b = protocol.execute(spec, fused=False), protocol.execute(spec)
+        spec = execution.RunSpec(robot, condition, seed, steps)
+        a, b = execution.execute(spec, fused=False), execution.execute(spec)
         assert len(a["trial_ends"]) >= 3, (robot, condition)
         for key in ("trial_ends", "trace", "starts"):
             assert np.array_equal(a[key], b[key]), key
@@ -115,11 +115,11 @@ def test_an_observation_the_agent_refuses_is_the_same_error_in_a_stretch():
 
 
 def test_what_a_stretch_cannot_run_takes_the_step_by_step_loop():
-    spec = protocol.RunSpec("two_wheel", "avoidance", 0, 10, agent="qtable")
+    spec = execution.RunSpec("two_wheel", "avoidance", 0, 10, agent="qtable")
     env = tasks.load(spec.entry, seed=0)
-    assert not fused.Loop.supports(env, protocol.make_agent(spec, env))
-    ebrl_spec = protocol.RunSpec("two_wheel", "avoidance", 0, 10)
-    agent = protocol.make_agent(ebrl_spec, env)
+    assert not fused.Loop.supports(env, execution.make_agent(spec, env))
+    ebrl_spec = execution.RunSpec("two_wheel", "avoidance", 0, 10)
+    agent = execution.make_agent(ebrl_spec, env)
     assert fused.Loop.supports(env, agent)
     assert not fused.Loop.supports(env, agent, on_step=lambda *a: None)
     assert not fused.Loop.supports(env, agent, keys=("range", "touch"))

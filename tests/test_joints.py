@@ -359,10 +359,10 @@ def test_joint_motors_refuse_joints_no_actuator_moves_and_mixed_kinds(tmp_path):
 def test_joint_motors_and_the_quadrupeds_gait_run_the_same_fused_or_not(tmp_path):
     """The protocol's compiled stretches (experiments.running.fused) run the joint motors'
     realisation and the quadruped's servo gait as the step-by-step loop does."""
-    from experiments.running import protocol
+    from experiments.running import execution
     for robot, steps in ((str(_tricycle(tmp_path, "mixed")), 40), ("quadruped", 6)):
-        spec = protocol.RunSpec(robot, "avoidance", 0, steps)
-        a, b = protocol.execute(spec, fused=False), protocol.execute(spec)
+        spec = execution.RunSpec(robot, "avoidance", 0, steps)
+        a, b = execution.execute(spec, fused=False), execution.execute(spec)
         for key in ("trial_ends", "trace", "starts"):
             assert np.array_equal(a[key], b[key]), (robot, key)
 

@@ -9,7 +9,7 @@ import pytest
 
 import models
 import tasks
-from experiments.running import protocol
+from experiments.running import execution
 from helpers import ROOT, ebrl
 from tasks import mount, navigation
 from tasks.realisations.wheel_motors import WheelMotorsPhysics
@@ -93,8 +93,8 @@ def test_a_mount_of_our_own_two_wheel_file_runs_bit_for_bit_as_the_registered_ro
     path.write_text(CONTRACT_MOUNT.format(file=ROOT / "models" / "two_wheel.xml")
                     + f"[readings]\nradius = {radius!r}\n")
     for condition in ("random", "avoidance"):
-        mine = protocol.execute(protocol.RunSpec(str(path), condition, 3, 1500))
-        ours = protocol.execute(protocol.RunSpec("two_wheel", condition, 3, 1500))
+        mine = execution.execute(execution.RunSpec(str(path), condition, 3, 1500))
+        ours = execution.execute(execution.RunSpec("two_wheel", condition, 3, 1500))
         assert np.array_equal(mine["trace"], ours["trace"]), condition
         assert np.array_equal(mine["trial_ends"], ours["trial_ends"])
     a, b = tasks.compile_robot(tasks.resolve(str(path)))[0], tasks.compile_robot(tasks.ROBOTS["two_wheel"])[0]
@@ -267,14 +267,14 @@ def test_the_fused_loop_takes_every_shipped_mount():
     for name, supported in ((name, True) for name in tasks.MOUNTS):
         env = tasks.load(name, seed=0)
         try:
-            agent = protocol.make_agent(protocol.RunSpec(name, "avoidance", 0, 10), env)
+            agent = execution.make_agent(execution.RunSpec(name, "avoidance", 0, 10), env)
             assert fused.Loop.supports(env, agent) is supported, name
         finally:
             env.close()
 
 
 def test_the_ant_walks_the_two_wheel_actions_within_its_stated_limits():
-    """The gait drive (tasks/gait.py) over 60 random free-space actions: the turn and the
+    """The gait drive (tasks/realisations/gait.py) over 60 random free-space actions: the turn and the
     move errors within the limits the ant's mount states, and no fall in 200 random
     actions that ram the walls."""
     from experiments.checks import robotcheck

@@ -4,7 +4,7 @@ import pytest
 from numba import njit
 
 from ebrl import records
-from ebrl.kernels import AGENT_FIELDS, AgentRecord
+from ebrl.steps import AGENT_FIELDS, AgentRecord
 from tasks.kernels.thrusters import ThrustersRecord
 from tasks.kernels.stream import Stream, stream_state
 

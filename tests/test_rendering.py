@@ -10,7 +10,7 @@ import pytest
 
 import tasks
 from ebrl.agent import DECIDERS
-from experiments.running import protocol
+from experiments.running import execution
 from experiments.outputs import rendering
 from models import UNIT
 
@@ -83,14 +83,14 @@ def _explained(spec, **options):
         if image is not None:
             last["frame"], last["bare"] = image, rendering.frame(args[1].physics)
 
-    result = protocol.execute(spec, on_step=on_step)
+    result = execution.execute(spec, on_step=on_step)
     return result, explainer, last["frame"], last["bare"]
 
 
 def test_legend_and_path_colours_match_the_decision_record():
     # policy_threshold -1: the memory acts as soon as it holds something, exploration hands
     # 5% of those steps to the fallback; the first step is the fallback's own.
-    spec = protocol.RunSpec("floating", "avoidance", 0, 300, (("policy_threshold", -1.0),))
+    spec = execution.RunSpec("floating", "avoidance", 0, 300, (("policy_threshold", -1.0),))
     result, explainer, image, bare = _explained(spec, beams=False, caption=False)
     names = explainer.names
     record = explainer.decisions[1:]
@@ -117,8 +117,8 @@ def test_legend_and_path_colours_match_the_decision_record():
 
 def test_a_video_runs_the_run_itself():
     """Recording changes no bit of the run: the same trace and trials as `ebrl run`'s."""
-    spec = protocol.RunSpec("two_wheel", "avoidance", 3, 200)
-    plain = protocol.execute(spec)
+    spec = execution.RunSpec("two_wheel", "avoidance", 3, 200)
+    plain = execution.execute(spec)
     explained = _explained(spec)[0]
     assert np.array_equal(plain["trace"], explained["trace"])
     assert np.array_equal(plain["trial_ends"], explained["trial_ends"])

@@ -9,10 +9,11 @@ import numpy as np
 import pytest
 
 import tasks
-from experiments.running import protocol, runner
+from experiments.running import execution, runner
 from experiments.checks import robotcheck
 from helpers import ROOT, ebrl
 from tasks import navigation
+from tasks.protocols import PROTOCOL_VERSION
 
 MODELS = ROOT / "models"
 
@@ -85,12 +86,12 @@ def test_planar_trajectories_unchanged_by_the_registry():
     round the last bit per CPU (same code, same seeds), so on another kind a run may part
     from these by a hundredth of a unit after some thousands of steps. Made again, or
     checked, by tests/data/make_golden.py."""
-    with np.load(ROOT / "tests" / "data" / f"planar_traces_v{protocol.PROTOCOL_VERSION}.npz") as z:
+    with np.load(ROOT / "tests" / "data" / f"planar_traces_v{PROTOCOL_VERSION}.npz") as z:
         expected = {k: z[k] for k in z.files}
     for key, trace in expected.items():
         robot, condition, seed = key.split("__")
-        spec = protocol.RunSpec(robot, condition, int(seed[5:]), len(trace) - 1)
-        got = protocol.execute(spec)["trace"]
+        spec = execution.RunSpec(robot, condition, int(seed[5:]), len(trace) - 1)
+        got = execution.execute(spec)["trace"]
         assert np.array_equal(got, trace), key
 
 
@@ -235,36 +236,36 @@ def test_hovercraft_glides_and_a_bump_takes_most_of_its_speed_into_the_wall():
 
 
 def test_a_drives_readings_reach_its_robots_runs_and_set_overrides_them():
-    """Protocol 6's readings (tasks.robots: a drive's, a robot's own on top) are each
-    run's config; --set (a spec's overrides) changes any of them. Both drives share one
-    learner (tasks.robots.LEARNER)."""
+    """The adopted protocol's readings (tasks.protocols.ADOPTED: every robot's, a drive's,
+    a robot's own on top) are each run's config; --set (a spec's overrides) changes any
+    of them. Both drives share one learner (ADOPTED.readings)."""
     floating = dict(tasks.ROBOTS["floating"].readings)
-    spec = protocol.RunSpec("floating", "avoidance", 0, 10)
+    spec = execution.RunSpec("floating", "avoidance", 0, 10)
     agent, task = spec.agent_config(), spec.task_config()
     assert agent.policy_threshold == floating["policy_threshold"] == \
-        dict(tasks.robots.LEARNER)["policy_threshold"] > 0
+        dict(tasks.protocols.ADOPTED.readings)["policy_threshold"] > 0
     assert agent.initial_reliability == 1.0
     assert (agent.eq9_dead_zone, agent.random_in_avoidance, agent.random_demand) == \
         ("keep", "replace", "uniform_walk")
     assert (task.bump, task.radius, task.velocity_code) == ("stop", floating["radius"], "code")
     assert agent.memory_size == 4096 and task.sensor_noise == 0.05 * 255   # Table 1, 3.2
     # The hovercraft shares the drive's readings, not the planar puck's body.
-    hover = protocol.RunSpec("hovercraft", "avoidance", 0, 10)
+    hover = execution.RunSpec("hovercraft", "avoidance", 0, 10)
     assert hover.agent_config() == agent
     assert hover.task_config().action_noise == task.action_noise == floating["action_noise"]
     assert (hover.task_config().bump, hover.task_config().radius) == ("grip", None)
     # The two-wheel drive: its fallback's and move's readings, the same learner, the
     # paper's 5% action noise; diff_drive keeps its own body (no radius reading).
-    two = protocol.RunSpec("diff_drive", "random", 0, 10)
+    two = execution.RunSpec("diff_drive", "random", 0, 10)
     assert (two.agent_config().initial_reliability, two.agent_config().policy_threshold) == \
         (1.0, agent.policy_threshold)
     assert (two.agent_config().random_demand, two.agent_config().random_in_avoidance) == \
         ("uniform_walk", "add")
     assert (two.task_config().leftover_turn, two.task_config().radius) == ("away", None)
     assert two.task_config().action_noise == 0.05
-    planar = protocol.RunSpec("two_wheel", "random", 0, 10).task_config()
+    planar = execution.RunSpec("two_wheel", "random", 0, 10).task_config()
     assert planar.radius == dict(tasks.ROBOTS["two_wheel"].readings)["radius"] < 1.5
-    over = protocol.RunSpec("floating", "avoidance", 0, 10,
+    over = execution.RunSpec("floating", "avoidance", 0, 10,
                             (("bump", "grip"), ("policy_threshold", 0.1)))
     assert (over.task_config().bump, over.agent_config().policy_threshold) == ("grip", 0.1)
     assert over.parameters()["task"]["bump"] == "grip"
@@ -274,11 +275,11 @@ def test_a_drives_readings_reach_its_robots_runs_and_set_overrides_them():
 
 
 def test_the_literal_protocol_lists_every_reading_once_and_reaches_the_run():
-    """tasks.robots.LITERAL names every reading of the registry once, with an allowed
+    """tasks.protocols.LITERAL names every reading of the registry once, with an allowed
     value; a spec under it carries them all in its configs, whatever the entry's own."""
-    from experiments.running.protocol import RunSpec
+    from experiments.running.execution import RunSpec
     from tasks import readings
-    from tasks.robots import LITERAL
+    LITERAL = tasks.protocols.LITERAL.readings
     names = [name for name, _ in LITERAL]
     assert sorted(names) == sorted(readings.BY_NAME) and len(set(names)) == len(names)
     for name, value in LITERAL:

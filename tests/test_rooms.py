@@ -10,7 +10,7 @@ import pytest
 import models
 import tasks
 from experiments.outputs import optimal, rendering
-from experiments.running import protocol, results, runner
+from experiments.running import execution, results, runner
 from helpers import ebrl
 from models import UNIT, rooms
 
@@ -98,13 +98,13 @@ def test_random_mazes_are_reachable_and_drawn_by_their_seed(size):
 
 
 def test_a_room_is_part_of_a_runs_record_and_folder(tmp_path):
-    spec = protocol.RunSpec("two_wheel", "avoidance", 0, 60, room="u_maze")
-    paper = protocol.RunSpec("two_wheel", "avoidance", 0, 60, room="sutton")
-    assert paper.room is None and paper == protocol.RunSpec("two_wheel", "avoidance", 0, 60)
+    spec = execution.RunSpec("two_wheel", "avoidance", 0, 60, room="u_maze")
+    paper = execution.RunSpec("two_wheel", "avoidance", 0, 60, room="sutton")
+    assert paper.room is None and paper == execution.RunSpec("two_wheel", "avoidance", 0, 60)
     assert spec.label == "two_wheel@u_maze" and paper.label == "two_wheel"
     assert spec.parameters()["room"] == "u_maze" and "room" not in paper.parameters()
     assert spec.parameters()["model_sha256"] != paper.parameters()["model_sha256"]
-    assert protocol.RunSpec("two_wheel", "avoidance", 0, 1, room="random:9x6:3").label \
+    assert execution.RunSpec("two_wheel", "avoidance", 0, 1, room="random:9x6:3").label \
         == "two_wheel@random-9x6-3"
     ran = runner.run([spec, paper], tmp_path, workers=1, progress=False)
     assert ran.made == 2 and not ran.failed
@@ -154,7 +154,7 @@ def test_robots_run_and_render_in_other_rooms(robot, room):
             assert abs(f * cy / cz) < rendering.HEIGHT / 2 and abs(f * cx / cz) < rendering.WIDTH / 2
     finally:
         env.close()
-    result = protocol.execute(protocol.RunSpec(robot, "avoidance", 0, 150, room=room))
+    result = execution.execute(execution.RunSpec(robot, "avoidance", 0, 150, room=room))
     assert len(result["trace"]) == 151
 
 

@@ -11,10 +11,10 @@ import pathlib
 
 import pytest
 
-from experiments.running import protocol
+from tasks.protocols import PROTOCOL_VERSION
 from helpers import ROOT
 
-DIGESTS = ROOT / "tests" / "data" / f"step_digests_v{protocol.PROTOCOL_VERSION}.json"
+DIGESTS = ROOT / "tests" / "data" / f"step_digests_v{PROTOCOL_VERSION}.json"
 
 
 def _cases():

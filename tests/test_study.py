@@ -15,10 +15,11 @@ pytestmark = pytest.mark.filterwarnings("ignore:Heartbeat of storage:UserWarning
 
 @pytest.fixture
 def quick(monkeypatch):
-    """The study module with a one-second heartbeat and grace (Optuna's least)."""
-    from experiments.studies import study
-    monkeypatch.setattr(study, "HEARTBEAT", 1)
-    monkeypatch.setattr(study, "GRACE", 1)
+    """The study module with a one-second heartbeat and grace (Optuna's least: its
+    storage's, experiments.studies.storage)."""
+    from experiments.studies import storage, study
+    monkeypatch.setattr(storage, "HEARTBEAT", 1)
+    monkeypatch.setattr(storage, "GRACE", 1)
     return study
 
 
@@ -26,7 +27,7 @@ def running(study, s, worker):
     """A trial asked and claimed as worker (host and pid) with a heartbeat now."""
     t = s.ask({"x": optuna.distributions.FloatDistribution(0.0, 1.0)})
     o = study.opened(s)
-    o.storage.set_trial_system_attr(o.trial_id(t), study.WORKER, worker)
+    o.storage.set_trial_system_attr(o.trial_id(t), study.storage.WORKER, worker)
     o.storage.record_heartbeat(o.trial_id(t))
     return t
 

@@ -17,16 +17,16 @@ import time
 import mujoco
 
 from ebrl.benchmark import reference_pass
-from experiments.running import protocol
+from experiments.running import execution
 
 
 def measure(robot, steps, blocks=5, room=None):
     """Medians over `blocks` blocks of `steps` timed steps each (this machine's timings
     vary by about 10% from one moment to the next; the median of blocks much less)."""
     import tasks
-    spec = protocol.RunSpec(robot, "avoidance", 0, steps, room=room)
+    spec = execution.RunSpec(robot, "avoidance", 0, steps, room=room)
     env = tasks.load(spec.entry, seed=0, room=spec.room)
-    agent = protocol.make_agent(spec, env)
+    agent = execution.make_agent(spec, env)
     config = spec.agent_config()
     keys = tuple(key for key, _ in spec.entry.modalities)
     clock = time.perf_counter
@@ -36,7 +36,7 @@ def measure(robot, steps, blocks=5, room=None):
         """One protocol step; returns (seconds in env.step, seconds in the agent)."""
         nonlocal ts
         t0 = clock()
-        action = agent.act(*protocol.agent_input(ts.observation, keys))
+        action = agent.act(*execution.agent_input(ts.observation, keys))
         t1 = clock()
         ts = env.step(action)
         t2 = clock()
@@ -69,10 +69,10 @@ def measure(robot, steps, blocks=5, room=None):
     # The protocol's own loop: stretches of steps in one compiled call (experiments.running.fused).
     env.close()
     fused_times = []
-    spec = protocol.RunSpec(robot, "avoidance", 0, config.memory_size + 200 + blocks * steps,
+    spec = execution.RunSpec(robot, "avoidance", 0, config.memory_size + 200 + blocks * steps,
                             room=room)
     env = tasks.load(spec.entry, seed=0, room=spec.room)
-    trials = protocol.Trials(env, protocol.make_agent(spec, env), keys, spec.steps)
+    trials = execution.Trials(env, execution.make_agent(spec, env), keys, spec.steps)
     if trials.fused:
         trials.run(config.memory_size + 200)  # fill the memory first, as above
         for _ in range(blocks):
@@ -91,7 +91,7 @@ def measure(robot, steps, blocks=5, room=None):
 def main(steps=2000, blocks=5, robots=None, room=None):
     from tasks.kernels.bindings import stage_timers_off
     from tasks.robots import ROBOTS
-    with stage_timers_off():  # as `ebrl run` steps (protocol.execute), raw physics too
+    with stage_timers_off():  # as `ebrl run` steps (execution.execute), raw physics too
         rows = [measure(robot, steps, blocks, room) for robot in (robots or tuple(ROBOTS))]
     print(f"microseconds per agent step, memory full: medians of {blocks} blocks of {steps} steps"
           + (f", room {room}" if room is not None else ""))

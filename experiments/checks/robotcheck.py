@@ -157,7 +157,7 @@ def main(robots, actions, accuracy_actions, drive=None, room=None):
         r = fuzz(robot, actions, drive=drive, room=room)
         max_tilt = navigation.MAX_TILT_DEGREES
         if "falls" in dict(tasks.resolve(robot, drive).accuracy_limits):
-            max_tilt = 90.0  # a gait's falls are counted instead (tasks.gait's max_tilt)
+            max_tilt = 90.0  # a gait's falls are counted instead (tasks.realisations.gait's max_tilt)
         ok = (r["worst_clearance"] > -r["sink_limit"] and r["nan_steps"] == 0
               and r["warnings"] == 0 and r["max_tilt_degrees"] < max_tilt
               and r["falls"] <= r["fall_limit"])

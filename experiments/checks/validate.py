@@ -97,17 +97,17 @@ def number(kind, name, text):
 
 def agent_configs(robots, overrides, drive=None, agent="ebrl"):
     """Builds each robot's agent config and task config with the overrides once, here,
-    as a run would (protocol.RunSpec), so that a name the chosen learner and the task do
+    as a run would (execution.RunSpec), so that a name the chosen learner and the task do
     not have, or a value their configs refuse, stops the command before any run."""
     import dataclasses
 
-    from experiments.running import protocol
+    from experiments.running import execution
     from tasks.config import TaskConfig
     overrides = dict(overrides)
     size = overrides.get("memory_size")
     if size is not None and size > MAX_MEMORY_SIZE:
         raise ValueError(f"memory_size must be at most {MAX_MEMORY_SIZE:,}, got {size:,}")
-    config_cls, _ = protocol.agent_classes(agent)
+    config_cls, _ = execution.agent_classes(agent)
     known = {f.name for cls in (config_cls, TaskConfig) for f in dataclasses.fields(cls)}
     unknown = next((k for k in overrides if k not in known), None)
     if unknown is not None:
@@ -115,7 +115,7 @@ def agent_configs(robots, overrides, drive=None, agent="ebrl"):
     task_fields = {f.name for f in dataclasses.fields(TaskConfig)}
     shown = " ".join(f"{k}={v}" for k, v in sorted(overrides.items()))
     for robot in robots:
-        spec = protocol.RunSpec(robot, "random", 0, 1, tuple(sorted(overrides.items())),
+        spec = execution.RunSpec(robot, "random", 0, 1, tuple(sorted(overrides.items())),
                                 drive, agent)
         try:
             task = spec.task_config()

@@ -135,10 +135,10 @@ def add_backend(parser):
 
 
 def add_protocol(parser):
-    from tasks.robots import PROTOCOLS
+    from tasks.protocols import PROTOCOL_VERSION, PROTOCOLS
     parser.add_argument("--protocol", type=choice(PROTOCOLS), default="adopted",
-                        help="the readings: adopted (each robot's entry, protocol "
-                             "PROTOCOL_VERSION's) or literal (the paper as written, "
+                        help=f"the readings (tasks/protocols.py): adopted (protocol "
+                             f"{PROTOCOL_VERSION}'s) or literal (the paper as written, "
                              "docs/interpretation.md); default: adopted")
 
 

@@ -106,7 +106,7 @@ def plan(args, overrides=()):
     return runner.plan(selected_robots(args), conditions, args.seeds, args.steps, overrides,
                        args.drive, getattr(args, "agent", "ebrl"),
                        getattr(args, "first_trial", False),
-                       readings=getattr(args, "protocol", "adopted"),
+                       protocol=getattr(args, "protocol", "adopted"),
                        room=getattr(args, "room", None))
 
 

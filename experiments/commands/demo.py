@@ -24,7 +24,7 @@ def run(args):
     except ValueError as e:
         return fail(str(e))
     from experiments.outputs import rendering
-    from experiments.running import protocol, results, runner
+    from experiments.running import execution, results, runner
     from tasks.robots import PAPER_ROBOTS, ROBOTS
     budgets = {r: max(10_000, ROBOTS[r].budget // 5) for r in PAPER_ROBOTS}
     specs = runner.plan(PAPER_ROBOTS, paper.CONDITIONS, range(SEEDS), budgets)
@@ -40,6 +40,6 @@ def run(args):
         return fail(str(e))
     robot = PAPER_ROBOTS[0]
     video = args.out / f"{robot}_avoidance_seed000.mp4"
-    rendering.record(protocol.RunSpec(robot, "avoidance", 0, VIDEO_STEPS), video)
+    rendering.record(execution.RunSpec(robot, "avoidance", 0, VIDEO_STEPS), video)
     print(f"report:  {path}\nfigures: {args.out / 'figures'}/\nvideo:   {video}")
     return 0

@@ -85,9 +85,9 @@ def run(args):
         problem, url = _check(args)
     except ValueError as e:
         return fail(str(e))
-    from experiments.running import protocol, results
+    from experiments.running import execution, results
     from experiments.studies import evolve, study
-    label = protocol.RunSpec(args.robot, "avoidance", 0, 1, drive=args.drive, room=args.room).label
+    label = execution.RunSpec(args.robot, "avoidance", 0, 1, drive=args.drive, room=args.room).label
     name = args.study or evolve.study_name(label, not args.no_learning)
     args.out.mkdir(parents=True, exist_ok=True)
     try:

@@ -122,7 +122,7 @@ def _search(args, s, problem, names):
 
 def _in_room(name, room):
     """A study's default name: with "@<room>" in a room other than the paper's."""
-    from experiments.running.protocol import ROOM_MARK
+    from experiments.running.execution import ROOM_MARK
     from models.rooms import tag
     return name if room is None else f"{name}{ROOM_MARK}{tag(room)}"
 

@@ -96,9 +96,9 @@ def _check(args):
 
 def _specs(args, variants, genome):
     """One RunSpec per variant; with --compare behaviour, the first runs the paper's rule."""
-    from experiments.running import protocol
+    from experiments.running import execution
     paper_first = args.compare is not None and args.compare[0] == "behaviour"
-    return [protocol.RunSpec(args.robot, condition, args.seed, args.steps, tuple(sorted(pairs)),
+    return [execution.RunSpec(args.robot, condition, args.seed, args.steps, tuple(sorted(pairs)),
                              drive=args.drive,
                              behaviour=None if paper_first and i == 0 else genome,
                              room=args.room)

@@ -10,7 +10,7 @@ from experiments.commands.common import (check_agent, check_backend, check_behav
 
 
 def add_parser(subparsers):
-    from experiments.running.protocol import AGENTS
+    from experiments.running.execution import AGENTS
     p = subparsers.add_parser("run", help="run the protocol (skips runs already on disk)")
     arguments.add_robots(p, "paper")
     arguments.add_room(p)

@@ -12,7 +12,7 @@ from experiments.running import settings
 
 
 def add_parser(subparsers):
-    from experiments.running.protocol import AGENTS
+    from experiments.running.execution import AGENTS
     p = subparsers.add_parser("sweep",
                               help="the protocol at several values of one agent parameter")
     p.add_argument("--param", default="policy_threshold")

@@ -210,15 +210,14 @@ def optimal(robot, drive=None, room=None):
     """{'length', 'steps', 'steps_lower', 'path'} for robot (a registered name, or a file
     with its drive) from the room's nominal start, in paper units; steps is the feasible
     plan, steps_lower a bound no trial can beat. room: models.rooms' (None: the paper's)."""
-    import models
     import tasks
+    from models import rooms
     from tasks import navigation
     entry = tasks.resolve(robot, drive)
-    # the compiled room alone (as tasks.load compiles it, with the robot's readings): no
-    # environment, so a report loads none of the drive's compiled kernels
-    model, _ = tasks.compile_robot(entry, entry.task_config(), room)
-    field, obstacles, goal, start = models.room_layout(model)
-    radius = navigation.robot_radius(model)
+    field, obstacles, goal, start = rooms.layout(room)
+    # the robot's radius under its readings, from its model as tasks.load compiles it (no
+    # environment, so a report loads none of the drive's compiled kernels)
+    radius = navigation.robot_radius(tasks.compiled_model(entry, entry.task_config())[0])
     length, path = shortest_path(start[:2], field, obstacles, goal, radius)
     if entry.drive == "two_wheel":
         steps = lower = two_wheel_steps(path, start[2])

@@ -281,7 +281,7 @@ def _legend(viewport, context, rows):
 
 
 class Explainer:
-    """Follows one run step by step (protocol.execute's on_step) and makes its frames:
+    """Follows one run step by step (execution.execute's on_step) and makes its frames:
     who chose each step (agent.decision), the trial and the goals so far."""
 
     def __init__(self, spec, *, every, camera="top", label="", beams=True, path="decider",
@@ -394,9 +394,9 @@ def record(spec, path, *, frames=600, fps=FPS, camera="top", beams=True, path_st
            caption=True, label="", quality=7):
     """Runs spec exactly as `ebrl run` does and writes an MP4 of it, from `camera`, with the
     overlays chosen (see the module's docstring); at most about `frames` frames. Returns
-    the run's result (protocol.execute's) with `decisions`, who chose each step's action
+    the run's result (execution.execute's) with `decisions`, who chose each step's action
     (indices of `decider_names`)."""
-    from experiments.running import protocol
+    from experiments.running import execution
     explainer = Explainer(spec, every=_every(spec, frames), camera=camera, label=label,
                           beams=beams, path=path_style, caption=caption)
     with _video(path, fps, quality) as writer:
@@ -405,7 +405,7 @@ def record(spec, path, *, frames=600, fps=FPS, camera="top", beams=True, path_st
             if image is not None:
                 writer.append_data(image)
 
-        result = protocol.execute(spec, on_step=on_step)
+        result = execution.execute(spec, on_step=on_step)
     result["decisions"] = explainer.decisions
     result["decider_names"] = explainer.names
     return result
@@ -416,7 +416,7 @@ def record_compare(specs, labels, path, *, frames=600, fps=FPS, camera="top", be
     """Two runs side by side in one MP4: specs[0] on the left, specs[1] on the right, a
     frame of each at the same steps (the specs must have the same number of steps). The
     left run is recorded first to a temporary file, read back beside the right one."""
-    from experiments.running import protocol
+    from experiments.running import execution
     left, right = specs
     if left.steps != right.steps:
         raise ValueError("the two runs of a comparison must have the same number of steps")
@@ -438,7 +438,7 @@ def record_compare(specs, labels, path, *, frames=600, fps=FPS, camera="top", be
                     if image is not None:
                         writer.append_data(np.hstack([next(frames_left), image]))
 
-                result = protocol.execute(right, on_step=on_step)
+                result = execution.execute(right, on_step=on_step)
         result["decisions"], result["decider_names"] = explainer.decisions, explainer.names
         results.append(result)
     return results

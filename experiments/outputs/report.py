@@ -12,8 +12,9 @@ from tasks.robots import DRIVES
 
 @functools.cache
 def _room_layout(room=None):
-    import models
-    return models.room_layout(models.room_model(room))
+    """The room's layout from its map (models.rooms.layout), once per room."""
+    from models import rooms
+    return rooms.layout(room)
 
 
 def paper_figures(group, condition=None):

@@ -1,10 +1,10 @@
 """The protocol's loop for a stretch of a trial in one compiled call: the speed path of
-`experiments.running.protocol.execute`, with the same bits as its step-by-step loop.
+`experiments.running.execution.execute`, with the same bits as its step-by-step loop.
 
 The step-by-step loop runs, per agent step, `ebrl.Agent.act`, `tasks.Environment.step`
 and `ebrl.Agent.learn`: each a little Python around one compiled function
 (`ebrl.agent.act_step`, `tasks.kernels.steps.step` with the task's draws
-`tasks.kernels.stream.task_draws`, `ebrl.kernels.learn_step`, and at a goal
+`tasks.kernels.stream.task_draws`, `ebrl.steps.learn_step`, and at a goal
 `ebrl.agent.trial_end`). `run` iterates those same functions inside one numba call, up
 to a trial's end, on the same named records: the agent's (`Agent.record`, its numpy
 Generator inside, drawn in place), its fallback's (`Agent.fallback_record`), the drive's
@@ -25,6 +25,7 @@ from numba import njit
 
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl import kernels as agent_kernels
+from ebrl import steps as agent_steps
 from ebrl import records
 from ebrl.agent import act_step, invalid_observation, trial_end
 from tasks.kernels import bindings, body
@@ -51,20 +52,35 @@ class Sensing(records.Record):
 Sensing.constructor = njit(cache=True)(lambda *values: Sensing(*values))
 
 
+def layout(keys, n_codes):
+    """(layout, range_at) of an observation of the modalities `keys` in order: each key's
+    index in MODALITIES, and the range codes' offset in the agent's input."""
+    parts = np.array([MODALITIES.index(k) for k in keys], dtype=np.int64)
+    return parts, sum(n_codes if k == "range" else 2 for k in keys[:keys.index("range")])
+
+
+@njit(cache=True)
+def compose(codes, velocity, layout, scale, obs):
+    """The agent's input, obs, from the sensor values by the modalities' layout: the range
+    codes times the scale (Section 3.4: into [0, 1]), the velocity as it is. The one
+    builder of the agent's input: the compiled loop's (`observe`) and the step-by-step
+    loop's (experiments.running.execution.agent_input)."""
+    at = 0
+    for part in layout:
+        if part == 0:
+            for i in range(codes.shape[0]):
+                obs[at + i] = codes[i] * scale
+            at += codes.shape[0]
+        else:
+            for i in range(velocity.shape[0]):
+                obs[at + i] = velocity[i]
+            at += velocity.shape[0]
+
+
 @njit(cache=True)
 def observe(io):
-    """The agent's input from the sensor values, by the modalities' layout: the range
-    codes times the scale (protocol.agent_input's), the velocity as it is."""
-    at = 0
-    for part in io.layout:
-        if part == 0:
-            for i in range(io.codes.shape[0]):
-                io.obs[at + i] = io.codes[i] * io.scale
-            at += io.codes.shape[0]
-        else:
-            for i in range(io.velocity.shape[0]):
-                io.obs[at + i] = io.velocity[i]
-            at += io.velocity.shape[0]
+    """The agent's input from the loop's sensor values (`compose`)."""
+    compose(io.codes, io.velocity, io.layout, io.scale, io.obs)
 
 
 @njit(cache=True)
@@ -91,7 +107,7 @@ def run(steps, agent, fallback, drive, stream, io, trace, first):
         if status != bindings.OK:
             io.status = status
             return k, FAILED
-        agent_kernels.learn_step(agent, 1.0 if goal else 0.0)
+        agent_steps.learn_step(agent, 1.0 if goal else 0.0)
         x, y, _ = body.base_pose(drive)
         trace[first + k, 0] = x
         trace[first + k, 1] = y
@@ -116,13 +132,12 @@ class Loop:
         self.env, self.agent, self.trace = env, agent, trace
         n_codes = physics.n_beams
         u, z, vz = task.draw_buffers(n_codes)
-        layout = np.array([MODALITIES.index(k) for k in keys], dtype=np.int64)
-        range_at = sum(n_codes if k == "range" else 2 for k in keys[:keys.index("range")])
+        parts, range_at = layout(keys, n_codes)
         #: The loop's record (Sensing): the last sensor values, the agent's input, draws.
         self._codes, self._velocity, self._obs = (np.zeros(n_codes), np.zeros(2),
                                                   np.zeros(agent.obs_dim))
         self.io = Sensing.build(
-            codes=self._codes, velocity=self._velocity, layout=layout,
+            codes=self._codes, velocity=self._velocity, layout=parts,
             scale=navigation.READING_SCALE, obs=self._obs, range_at=range_at, u=u, z=z,
             sensor_noise=float(task.sensor_noise), vz=vz,
             velocity_noise=float(task.velocity_noise), env_action=np.zeros(agent.action_dim),

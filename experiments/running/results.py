@@ -27,7 +27,7 @@ import traceback
 import numpy as np
 
 from experiments import paper
-from experiments.running import protocol
+from experiments.running import execution
 
 BOOTSTRAP_SAMPLES = 10_000
 BOOTSTRAP_SEED = 20000  # the paper's year: any fixed number makes summaries reproducible
@@ -192,7 +192,7 @@ def write_run(root, spec, result, versions_info):
     parameters = spec.parameters()
     atomic_write(folder / "config.json", dumps(dict(parameters, versions=versions_info)))
     ends = result["trial_ends"]
-    lengths = protocol.trial_lengths(ends)
+    lengths = execution.trial_lengths(ends)
     rows = io.StringIO()
     w = csv.writer(rows, lineterminator="\n")
     w.writerow(["trial", "steps", "cumulative_steps", "reached"])
@@ -205,10 +205,10 @@ def write_run(root, spec, result, versions_info):
     atomic_write(folder / "trials.csv", rows.getvalue())
     buf = io.BytesIO()
     np.savez_compressed(buf, trace=result["trace"], starts=result["starts"],
-                        trial_ends=ends, scale=protocol.TRACE_SCALE)
+                        trial_ends=ends, scale=execution.TRACE_SCALE)
     atomic_write(folder / "trace.npz", buf.getvalue())
     run = {"status": "complete", "parameters": parameters,
-           "metrics": protocol.metrics(ends), "seconds": round(result["seconds"], 3),
+           "metrics": execution.metrics(ends), "seconds": round(result["seconds"], 3),
            "memory_decisions": result["memory_decisions"]}
     atomic_write(folder / "run.json", dumps(run))
     return run
@@ -325,7 +325,7 @@ def load_runs(root, specs=None, room=False):
     (robot, condition, seed) -> run.json dict. Failed runs are left out (see
     failed_runs). room: only the runs in that room (None: the paper's; False: all). A
     run's robot (its label) names its room, so runs in different rooms never share a key
-    (protocol.RunSpec.label)."""
+    (execution.RunSpec.label)."""
     root = pathlib.Path(root)
     if not root.is_dir():
         raise ResultsError(f"no results folder at {root}")
@@ -379,10 +379,10 @@ def trial_paths(trace, starts, trial_ends):
 def robot_order(label):
     """Group labels ("robot" or "robot.agent") in the registry's order of robots, then
     by learner (EBRL first); robots not in the registry after them."""
-    from experiments.running.protocol import AGENTS
+    from experiments.running.execution import AGENTS
     from tasks.robots import ROBOTS
     names = list(ROBOTS)
-    robot, _, agent = label.removesuffix(protocol.FIRST_TRIAL).partition(".")
+    robot, _, agent = label.removesuffix(execution.FIRST_TRIAL).partition(".")
     return (names.index(robot) if robot in names else len(names),
             AGENTS.index(agent or "ebrl") if (agent or "ebrl") in AGENTS else len(AGENTS))
 

@@ -1,6 +1,6 @@
 """Runs a set of specs on a local process pool (spawn) or a Ray cluster.
 
-Workers only compute (`protocol.execute`); the driver writes each run as it
+Workers only compute (`execution.execute`); the driver writes each run as it
 arrives, so any worker count and either backend give identical files, and a run
 killed at any moment leaves only an unfinished folder that the next call redoes.
 
@@ -36,7 +36,7 @@ import sys
 import threading
 import time
 
-from experiments.running import protocol, results
+from experiments.running import execution, results
 
 # One BLAS thread per worker: the agent's products are small, and parallelism
 # comes from running several seeds at once. Set before workers import numpy.
@@ -49,13 +49,13 @@ Ran = collections.namedtuple("Ran", "made on_disk failed")
 
 
 def plan(robots, conditions, seeds, steps=None, overrides=(), drive=None, agent="ebrl",
-         first_trial=False, readings="adopted", room=None):
+         first_trial=False, protocol="adopted", room=None):
     """Specs in the order to start them: the longest first, for an even finish.
 
     steps: None for each robot's budget (the registry's), a number for all, or a dict
     by robot; drive: for robots given as files; first_trial: runs that end at their
-    first goal (protocol.RunSpec.first_trial); readings: a named protocol
-    (tasks.robots.PROTOCOLS: RunSpec.protocol); room: the room (protocol.RunSpec.room)."""
+    first goal (execution.RunSpec.first_trial); readings: a named protocol
+    (tasks.robots.PROTOCOLS: RunSpec.protocol); room: the room (execution.RunSpec.room)."""
     from tasks.robots import resolve
 
     def budget(robot):
@@ -63,8 +63,8 @@ def plan(robots, conditions, seeds, steps=None, overrides=(), drive=None, agent=
             return steps[robot]
         return steps if steps is not None else resolve(robot, drive).budget
 
-    specs = [protocol.RunSpec(r, c, s, budget(r), tuple(sorted(dict(overrides).items())),
-                              drive, agent, first_trial=first_trial, protocol=readings,
+    specs = [execution.RunSpec(r, c, s, budget(r), tuple(sorted(dict(overrides).items())),
+                              drive, agent, first_trial=first_trial, protocol=protocol,
                               room=room)
              for r in robots for c in conditions for s in seeds]
     return sorted(specs, key=lambda s: -s.steps)
@@ -109,7 +109,7 @@ def _execute(spec):
     crash = _selected(TEST_CRASH, spec)
     if crash == "":
         os._exit(70)
-    result = protocol.execute(spec)
+    result = execution.execute(spec)
     if crash == "SIGSEGV":  # a real one: native code reading address 0
         import ctypes
         ctypes.string_at(0)

@@ -9,9 +9,9 @@ heavy until asked.
 
 def _classes():
     """The config classes whose fields --set may name: every learner's, then the task's."""
-    from experiments.running import protocol
+    from experiments.running import execution
     from tasks.config import TaskConfig
-    return [protocol.agent_classes(a)[0] for a in protocol.AGENTS] + [TaskConfig]
+    return [execution.agent_classes(a)[0] for a in execution.AGENTS] + [TaskConfig]
 
 
 def kinds():
@@ -40,7 +40,7 @@ def check(name, value):
 
 def default(name, entries=()):
     """The default value of a --set name (EBRL's, a baseline's, or the task's); with
-    robots' registry entries, theirs (their readings, tasks.robots.Drive.readings): one
+    robots' registry entries, theirs (their readings: tasks.robots.Robot): one
     value if they agree, else None."""
     if entries:
         values = {dict(e.readings).get(name, default(name)) for e in entries}

@@ -100,7 +100,7 @@ def _concerns(changes, robot, condition):
 
 def plan(robots, seeds, steps, readings, combos, room=None):
     """{folder name: specs} for every cell, each cell only where its readings apply; in
-    room (protocol.RunSpec.room)."""
+    room (execution.RunSpec.room)."""
     out = {}
     for name, changes in cells(readings, combos):
         specs = [s for s in runner.plan(robots, paper.CONDITIONS, seeds, steps, changes, room=room)

@@ -12,7 +12,7 @@ trials is one CMA-ES generation.
 
 The fitness (Problem.score): the mean over the training seeds of the goals reached within
 the budget, EBRL learning from step 0 in the avoidance condition as in the protocol
-(experiments.running.protocol.execute); the study minimises its negative. Why goals rather than
+(experiments.running.execution.execute); the study minimises its negative. Why goals rather than
 steps per trial: goals are defined for every run, also one that never reaches the goal
 (steps per trial would have to drop such a seed, rewarding a behaviour that fails on it,
 or invent a penalty); they are the return the learner maximises (the cumulative reward
@@ -105,8 +105,8 @@ def check_genome(path, robots, drive=None, overrides=()):
 
 def paper_genome(entry):
     """The paper's rule for a robot's drive as a genome, with the robot's readings of the
-    learning variables and the dead zone (its agent config, protocol.RunSpec)."""
-    from experiments.running.protocol import RunSpec
+    learning variables and the dead zone (its agent config, execution.RunSpec)."""
+    from experiments.running.execution import RunSpec
     from tasks.robots import ROBOTS
     drive = None if entry.name in ROBOTS else entry.drive  # a robot file: its drive
     config = RunSpec(entry.name, CONDITION, 0, 1, drive=drive).agent_config()

@@ -3,7 +3,7 @@ readings of one drive against the paper's two first-trial distributions of that 
 
 A run's first trial is the physics and the fallback alone (experiments.paper.FIRST_TRIALS:
 memory never acts before the first reward), so no learning reading can move it, and a
-first-trial run (protocol.RunSpec.first_trial) costs a fraction of a full run: a trial
+first-trial run (execution.RunSpec.first_trial) costs a fraction of a full run: a trial
 of this stage runs 64 or more seeds of each condition, to the first goal or the drive's
 budget, through the one study runner (experiments.studies.study) that `ebrl fit` and
 `ebrl evolve` share.

@@ -101,7 +101,7 @@ BY_NAME = {p.name: p for p in SPACE}
 
 
 def default(name, robot="floating"):
-    """A robot's current default of a reading (its readings, tasks.robots.Drive.readings,
+    """A robot's current value of a reading (its readings: tasks.robots.Robot,
     else the config's field; the file's radius 1.5 and friction 1 where that is None).
     The search's subject is the floating robot: its defaults are trial 0 and the text
     of a trial's readings; a setting shared by both robots is run as given on each."""

@@ -20,7 +20,7 @@ import pathlib
 
 import numpy as np
 
-from experiments.running import protocol, results, runner
+from experiments.running import execution, results, runner
 
 ROBOTS = ("two_wheel", "floating")
 CONDITIONS = ("random", "avoidance")
@@ -46,7 +46,7 @@ def plan(sizes=SIZES, mazes=3, seeds=2, per_cell=STEPS_PER_CELL, robots=ROBOTS):
     """The study's specs: every robot, condition, size, maze (0..mazes-1) and seed; in
     the order to run them: seed by seed, maze by maze, every size, so that a study cut
     short holds whole (maze, seed) units of every size."""
-    return [protocol.RunSpec(robot, condition, seed, budget(size, maze, per_cell),
+    return [execution.RunSpec(robot, condition, seed, budget(size, maze, per_cell),
                              room=room(size, maze))
             for seed in range(seeds) for maze in range(mazes) for size in sizes
             for robot in robots for condition in CONDITIONS]

@@ -7,20 +7,22 @@ The mirror of ebrl/kernels.py for the simulator side, one module per job:
 | `bindings` | MuJoCo's C functions, its struct fields' views, its stage timers, `run`, the statuses |
 | `sensing` | the read-outs: pose, rangefinder distances and Section 3.2's code, velocity |
 | `stream` | the task's random stream (numpy's legacy draws, buffered) |
-| `body` | what every drive's record holds and the kernels every drive shares (goal, codes, noise) |
-| `two_wheel` | the two-wheel action family's step, written once |
-| `planar`, `wheels`, `motors`, `gait`, `joints` | the family's realisations: how a body turns and moves |
-| `floating` | the floating drive's step |
-| `steps` | the entry points: a whole agent step (`step`), a drive's action (`act`) |
+| `body` | what every realisation's record holds and the kernels all share (goal, codes, noise) |
+| `two_wheel` | the two-wheel action family's step, written once, on a realisation's phases |
+| `servos`, `wheels`, `wheel_motors`, `joint_motors`, `gait` | the family's realisations |
+| `plan` | the target plan and its controller (wheel_motors', joint_motors') |
+| `thrusters` | the floating drive's realisation and step |
+| `steps` | the realisations' table; the entry points `step` (an agent step), `observe` |
 
-Each drive's record is an ebrl.records.Record of named fields; tasks.navigation.Physics
-builds it. The dm_env hooks (tasks.navigation.Navigation) call these same kernels, so
-each drive's logic exists once. Every kernel is ``@njit(cache=True)`` with no fastmath:
+Each realisation's record is an ebrl.records.Record of named fields (`<Name>Record` in
+the module of its name: tasks.realisations); tasks.navigation.Physics builds it. The
+dm_env hooks (tasks.navigation.Navigation) run the same `steps.step`, so each
+realisation's logic exists once. Every kernel is ``@njit(cache=True)`` with no fastmath:
 the same operations in the same order as the Python they replaced, so the same bits
 (tests/data/planar_traces_v*.npz, tests/test_kernels.py).
 
-The kernels live here rather than beside each drive's Python (tasks.two_wheel,
-tasks.floating, tasks.gait) because `steps` compiles every drive's kernels in, and the
-drives' Python imports `steps`: kernels under the drives' packages would make an import
-circle. This package's __init__ imports nothing.
+The kernels live here rather than beside each realisation's Python
+(tasks.realisations) because `steps` compiles every realisation's kernels in, and the
+tasks' Python imports `steps`: kernels under the realisations' package would make an
+import circle. This package's __init__ imports nothing.
 """

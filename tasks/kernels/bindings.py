@@ -10,7 +10,7 @@ each floating-point operation runs as written, in the same order (same bits, tes
 What a kernel reads and writes of MuJoCo's structs:
     m, d          the mjModel and mjData addresses (`addresses`)
     flags         an int32 view of m->opt.disableflags (the sensor stage is switched on
-                  only for mj_sensorPos: tasks.sensing.ranges)
+                  only for mj_sensorPos: tasks.kernels.sensing.ranges)
     bad_qacc      an int32 view of d->warning[mjWARN_BADQACC].number
     ncon, contact the contact count and the contact array (contact_views)
     qpos, ctrl, sensordata, ...   MjData's own arrays (numpy views)
@@ -102,7 +102,7 @@ def _int_field(anchor, get, set_, span=4096):
         set_(old)
     both = hits[0] & hits[1]
     if len(both) != 1:  # pragma: no cover - a MuJoCo whose struct layout defeats the search
-        raise RuntimeError("tasks.bindings: a field of MuJoCo's struct was not found")
+        raise RuntimeError("tasks.kernels.bindings: a field of MuJoCo's struct was not found")
     return np.ctypeslib.as_array((ctypes.c_int32 * 1).from_address(anchor + 4 * both.pop()))
 
 
@@ -132,7 +132,7 @@ def contact_views(data):
     offsets = [c.frame.ctypes.data - start, c.geom1.ctypes.data - start,
                c.geom2.ctypes.data - start]
     if size % 8 or offsets[0] % 8 or offsets[1] % 4 or offsets[2] % 4:  # pragma: no cover
-        raise RuntimeError("tasks.bindings: an unexpected mjContact layout")
+        raise RuntimeError("tasks.kernels.bindings: an unexpected mjContact layout")
     words = data.narena // 8
     floats = np.ctypeslib.as_array((ctypes.c_double * words).from_address(start))
     ints = np.ctypeslib.as_array((ctypes.c_int32 * (2 * words)).from_address(start))

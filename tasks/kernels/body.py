@@ -1,7 +1,7 @@
 """What every drive's record holds, and the kernels every drive shares.
 
-A drive's record (an ebrl.records.Record: tasks.two_wheel.planar.PlanarDrive,
-tasks.floating.kernels.FloatingDrive, ...) starts with BODY_FIELDS, the robot's body in
+A realisation's record (an ebrl.records.Record: tasks.kernels.servos.ServosRecord,
+tasks.kernels.thrusters.ThrustersRecord, ...) starts with BODY_FIELDS, the robot's body in
 MuJoCo and the task's sensing, goal and action noise; its own fields follow. The kernels
 here work on any such record (numba compiles one version per record type): the substeps
 with the tilt check, the pose, the goal test, the range codes, the action noise's
@@ -13,6 +13,7 @@ import math
 from numba import njit
 
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from ebrl import kernels as agent_kernels
 from tasks.kernels import bindings, sensing
 
 #: The body's fields, as every drive's record starts.
@@ -31,13 +32,13 @@ BODY_FIELDS = (
 
 @njit(cache=True)
 def step_phase(s, n):
-    """n substeps (tasks.bindings.run) with the robot's tilt check."""
+    """n substeps (tasks.kernels.bindings.run) with the robot's tilt check."""
     return bindings.run(s.m, s.d, n, s.bad_qacc, s.xmat, s.free != 0, s.min_cos_tilt)
 
 
 @njit(cache=True)
 def base_pose(s):
-    """(x, y, heading) in units and radians (tasks.sensing.pose)."""
+    """(x, y, heading) in units and radians (tasks.kernels.sensing.pose)."""
     return sensing.pose(s.xpos, s.xmat, s.qpos, s.qyaw, s.unit)
 
 
@@ -64,15 +65,13 @@ def sense(s, noise):
 
 @njit(cache=True)
 def clip_unit(a):
-    """Each part clipped to [-1, 1] as Python's min(max(v, -1), 1); NaN and inf are
-    refused (returns False)."""
+    """The action's parts clipped to [-1, 1] in place (ebrl.kernels.clip_unit, the one
+    clip: as Python's min(max(v, -1), 1) for any finite v); NaN and inf are refused
+    (returns False, nothing clipped)."""
     for i in range(a.shape[0]):
         if not math.isfinite(a[i]):
             return False
-    for i in range(a.shape[0]):
-        v = a[i]
-        v = -1.0 if -1.0 > v else v
-        a[i] = 1.0 if 1.0 < v else v
+    agent_kernels.clip_unit(a)
     return True
 
 

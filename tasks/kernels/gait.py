@@ -73,7 +73,7 @@ def walk(s, n, amp, lift, freq):
     legs' shares in s.share), the torque motors' controls by PD and the position servos'
     to their targets (clipped to their ranges), runs control_substeps substeps and
     advances the phase by frequency * tick seconds.
-    Returns (the first non-OK status of tasks.bindings.run (UNSTABLE), else OK; the
+    Returns (the first non-OK status of tasks.kernels.bindings.run (UNSTABLE), else OK; the
     substeps run). The tilt is not checked here: a fall is judged at a phase's end
     (`ended`), as the car's motors judge it (tasks.kernels.plan.phase)."""
     kp, kd, tick = s.kp, s.kd, s.tick

@@ -136,7 +136,7 @@ class TaskStream:
         return self._random
 
     def draws(self, u, z, sensor_noise, vz, velocity_noise):
-        """One step's draws into u, z, vz (tasks.task_draws), from a new buffer
+        """One step's draws into u, z, vz (task_draws), from a new buffer
         where the current one might run out."""
         if self._saved is None or not task_draws(self.record, u, z, sensor_noise, vz,
                                                          velocity_noise):

@@ -10,7 +10,7 @@ What it makes, and which test reads it:
 
 - tests/data/planar_traces_v<PROTOCOL_VERSION>.npz (tests/test_robots.py,
   test_planar_trajectories_unchanged_by_the_registry): the first STEPS steps of seeds
-  SEEDS, every paper robot and condition, each the int16 trace of protocol.execute, keyed
+  SEEDS, every paper robot and condition, each the int16 trace of execution.execute, keyed
   "<robot>__<condition>__seed_NNN". The committed file was cut from the full clean-clone
   run behind RESULTS.md; a run's first steps are the same whatever its budget, which the
   test checks.
@@ -37,6 +37,8 @@ import tempfile
 
 import numpy as np
 
+from tasks.protocols import PROTOCOL_VERSION
+
 HERE = pathlib.Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 for _path in (ROOT, ROOT / "tests"):  # the packages, and the test module the digests live in
@@ -49,21 +51,20 @@ SEEDS = (0, 1)
 
 
 def traces_name():
-    from experiments.running import protocol
-    return f"planar_traces_v{protocol.PROTOCOL_VERSION}.npz"
+    return f"planar_traces_v{PROTOCOL_VERSION}.npz"
 
 
 def make_traces():
     """{key: int16 trace of STEPS + 1 positions} for every paper robot and condition."""
     from ebrl.intrinsic import CONDITIONS
-    from experiments.running import protocol
+    from experiments.running import execution
     from tasks.robots import PAPER_ROBOTS
     out = {}
     for robot in PAPER_ROBOTS:
         for condition in CONDITIONS:
             for seed in SEEDS:
-                spec = protocol.RunSpec(robot, condition, seed, STEPS)
-                out[f"{robot}__{condition}__seed_{seed:03d}"] = protocol.execute(spec)["trace"]
+                spec = execution.RunSpec(robot, condition, seed, STEPS)
+                out[f"{robot}__{condition}__seed_{seed:03d}"] = execution.execute(spec)["trace"]
     return out
 
 
@@ -80,8 +81,7 @@ EXTRA_FIELDS = {"two_wheel": [{"blocked_move": "refuse"}], "diff_drive": [{"bloc
 
 
 def step_digests_name():
-    from experiments.running import protocol
-    return f"step_digests_v{protocol.PROTOCOL_VERSION}.json"
+    return f"step_digests_v{PROTOCOL_VERSION}.json"
 
 
 def step_digest(robot, compiled, **fields):

@@ -1,4 +1,5 @@
-"""One run of the protocol: a robot, a condition and a seed, learning for a budget.
+"""One run of Section 3.6's procedure: a robot, a condition and a seed, learning for a
+budget, under a protocol's readings (tasks.protocols).
 
 The agent learns from step 0. When the robot reaches the goal the trial ends, the
 next starts from the jittered start, and the memory persists, until the budget of
@@ -17,17 +18,12 @@ import numpy as np
 
 import ebrl
 from ebrl.behaviour import Accelerating, Turning
+from tasks.protocols import PROTOCOLS
 
 if TYPE_CHECKING:  # tasks is imported where a spec needs it, not with this module
     from tasks.config import TaskConfig
     from tasks.robots import Robot
 
-#: Bump when a change alters what a run computes, so stale results are not reused.
-#: 6: issue 37's rules (the 20% random action Section 3.4's Gaussian, one learner for both
-#: robots: policy threshold 0.3, initial reliability 1); 5: stage 1's readings, eq 2-4 by
-#: reciprocals; 4: the adopted readings per drive,
-#: diff_drive's Euler; 3: float64 similarity (CHANGELOG.md: each version, its commit).
-PROTOCOL_VERSION = 6
 #: Positions are stored as int16 hundredths of a unit.
 TRACE_SCALE = 100.0
 #: The end of a first-trial run's label (RunSpec.first_trial): "two_wheel.first_trial".
@@ -55,8 +51,8 @@ class RunSpec:
     #: True: the run ends at its first goal (or its budget), its first trial bit for bit
     #: a full run's (`ebrl run --first-trial`); in its own folders (`label`).
     first_trial: bool = False
-    #: A named protocol of tasks.robots.PROTOCOLS: "adopted" (the registry's readings) or
-    #: "literal" (the paper as written, tasks.robots.LITERAL).
+    #: A protocol's name (tasks.protocols.PROTOCOLS): "adopted" (this replication's current
+    #: readings) or "literal" (the paper as written).
     protocol: str = "adopted"
     #: The room (models.rooms: a shipped map's name, random:WxH:SEED or a map file); None:
     #: the paper's `sutton` (so named, it is made None). A run in another room has
@@ -98,8 +94,8 @@ class RunSpec:
 
     def agent_config(self) -> Any:
         """EBRL: Table 1's column for the robot; a baseline: its config's defaults; with the
-        robot's readings (tasks.robots.Drive.readings), then the overrides, that name the
-        config's fields."""
+        robot's readings (its protocol's: tasks.protocols.Protocol.readings_for), then the
+        overrides, that name the config's fields."""
         config_cls, _ = agent_classes(self.agent)
         fields = {f.name for f in dataclasses.fields(config_cls)}
         mine = {k: v for k, v in (self.entry.agent_readings() | dict(self.overrides)).items()
@@ -122,7 +118,7 @@ class RunSpec:
         """Everything that determines the run's result; a rerun matches on this."""
         entry, task = self.entry, self.task_config()
         return {
-            "protocol_version": PROTOCOL_VERSION,
+            "protocol_version": PROTOCOLS[self.protocol].version,
             "robot": self.label,
             "robot_file": None if self.drive is None else str(entry.model),
             "robot_name": entry.name,
@@ -149,16 +145,12 @@ def _genome_dict(genome):
     return to_dict(genome)
 
 
-@functools.cache
 def model_digest(entry, task_config, room=None):
     """A digest of the composed MJCF with the entry's options and the task config's edits,
-    so results made with another model never match. Computed once per process and model
-    (composing takes milliseconds, and every spec asks)."""
-    import hashlib
-
+    so results made with another model never match (tasks.compiled_model: composed and
+    compiled once per process and model, the run then loads a copy)."""
     import tasks
-    _, spec = tasks.compile_robot(entry, task_config, room)
-    return hashlib.sha256(spec.to_xml().encode()).hexdigest()[:16]
+    return tasks.compiled_model(entry, task_config, room)[1]
 
 
 #: The learners `ebrl run --agent` knows: the paper's, then the baselines of Section 4.
@@ -194,7 +186,7 @@ def make_agent(spec, env):
     _, agent_seed = seeds_for(spec.seed)
     config = spec.agent_config()
     # The fallback's own readings: fields of every learner's config (ebrl.Config, the
-    # baselines' ebrl.baselines._Fallback), so the drive's readings reach every learner.
+    # baselines' ebrl.baselines.common._Fallback), so the drive's readings reach every learner.
     switches = {k: getattr(config, k) for k in ebrl.config.FALLBACK_READINGS}
     if spec.behaviour is not None:
         switches.pop("eq9_dead_zone", None)  # the genome's hold decides
@@ -209,32 +201,31 @@ def make_agent(spec, env):
 
 
 @functools.cache
-def _reading_scale():
-    # Imported here, not at the top: importing tasks loads MuJoCo and dm_control, which
-    # the command line's checks do without.
+def _composer(keys, n_codes):
+    """(compose, its layout, the ranges' offset, the input's size, the codes' scale) for
+    the modalities `keys` (experiments.running.fused.compose; imported here, not at the
+    top: importing it loads MuJoCo and numba, which the command line's checks do
+    without)."""
+    from experiments.running import fused
     from tasks.navigation import READING_SCALE
-    return READING_SCALE
+    parts, range_at = fused.layout(keys, n_codes)
+    size = sum(n_codes if k == "range" else 2 for k in keys)
+    return fused.compose, parts, range_at, size, READING_SCALE
 
 
 def agent_input(observation, keys=("range",)):
     """(agent observation, ranges for the fallback): the modalities `keys` in order,
-    the range ranges scaled to [0, 1] (Section 3.4), the others (the velocity, in
-    units/step) as they are."""
+    the range codes scaled to [0, 1] (Section 3.4), the velocity (units/step) as it is
+    (experiments.running.fused.compose, the compiled loop's builder too)."""
     codes = observation["range"]
-    if len(keys) == 1:
-        ranges = codes * _reading_scale()
-        return ranges, ranges
-    parts = [observation[k] for k in keys]
-    obs = np.empty(sum(len(p) for p in parts))
-    at, ranges = 0, None
-    for key, part in zip(keys, parts):
-        view = obs[at: at + len(part)]
-        if key == "range":
-            ranges = np.multiply(part, _reading_scale(), out=view)
-        else:
-            view[:] = part
-        at += len(part)
-    return obs, ranges
+    compose, parts, range_at, size, scale = _composer(tuple(keys), len(codes))
+    obs = np.empty(size)
+    compose(codes, observation.get("velocity", _NO_VELOCITY), parts, scale, obs)
+    return obs, obs[range_at: range_at + len(codes)]
+
+
+#: The velocity of an observation without one.
+_NO_VELOCITY = np.zeros(0)
 
 
 class Trials:
