@@ -7,7 +7,7 @@ import pathlib
 import numpy as np
 
 from experiments import paper
-from experiments.running import results
+from experiments.running import lock, results
 from tasks.robots import DRIVES
 
 @functools.cache
@@ -332,6 +332,7 @@ def build(root, room=False):
     runs = results.load_runs(root, room=room)
     failed = results.failed_runs(root)  # named below, never averaged
     summary = results.summarize(runs)
+    summary["locks"] = lock.of_runs(root, runs)  # the environments the runs were made in
     if failed:
         summary["failed"] = [{"run": name, "error": error} for name, error in failed.items()]
     figures = root / "figures"
@@ -353,6 +354,8 @@ def build(root, room=False):
         f"# Report: {root}", "",
         f"{len(runs)} runs. Section 3.6 of Unemi (2000) beside ours; 95% intervals are "
         "percentile bootstraps over seeds.", "",
+        "Environment: requirements.lock " + ", ".join(summary["locks"]) + " (config.json's "
+        "versions.lock: the first 12 hex digits of its sha256).", "",
         *failed_section(summary),
         "## Section 3.6 figures", "", comparison_table(summary), "",
         "## Goals within the budget", "", goals_table(summary), "",
