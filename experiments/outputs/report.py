@@ -46,6 +46,13 @@ def draw_room(ax, room=None):
     ax.set_yticks([])
 
 
+def legend_below(ax, **kwargs):
+    """The legend of a room's axes (draw_room) under them, outside the room: it covers no
+    part of it, the start and the goal above all, in any room."""
+    return ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), borderaxespad=0.3,
+                     frameon=False, **kwargs)
+
+
 def fmt(v, digits=0):
     if v is None:
         return "-"
@@ -225,6 +232,12 @@ def typical_seed(runs, robot, condition):
 def traces_figure(root, runs, robot, path):
     """Figures 2 and 4: typical successful traces: the median seed's first trial and a
     typical learned one."""
+    save(traces_plot(root, runs, robot), path)
+
+
+def traces_plot(root, runs, robot):
+    """traces_figure's figure, not yet saved: one axes a condition, each its room with its
+    legend below it."""
     plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(11, 3.9))
     for ax, condition in zip(axes, paper.CONDITIONS):
@@ -244,12 +257,12 @@ def traces_figure(root, runs, robot, path):
                 label=f"typical learned trial, #{k + 1} ({len(last) - 1} steps)")
         ax.plot(*last[0], "o", color="tab:blue")
         ax.set_title(f"{'without' if condition == 'random' else 'with'} avoidance, seed {seed}")
-        ax.legend(loc="lower right", fontsize=7)
+        legend_below(ax, fontsize=7)
     drive = next((run["parameters"].get("drive") for (r, _, _), run in runs.items() if r == robot),
                  None)
     figure = {"two_wheel": "the paper's Figure 2: ", "floating": "the paper's Figure 4: "}
     fig.suptitle(f"{figure.get(drive, '')}{robot}: typical traces of successful trials")
-    save(fig, path)
+    return fig
 
 
 def first_vs_learned_figure(summary, path):
