@@ -158,11 +158,13 @@ def claims_table(summary):
 
 # -- figures ----------------------------------------------------------------------
 def save(fig, path, dpi=90):
-    """Lays out, writes and closes a figure; returns path."""
+    """Lays out, writes and closes a figure; returns path. The image is the figure's tight
+    box, so a legend under a room (legend_below) is never cut off."""
     fig.tight_layout()
     try:
         with results.atomic_file(path) as tmp:
-            fig.savefig(tmp, dpi=dpi, format=pathlib.Path(path).suffix[1:] or "png")
+            fig.savefig(tmp, dpi=dpi, format=pathlib.Path(path).suffix[1:] or "png",
+                        bbox_inches="tight", pad_inches=0.05)
     finally:
         pyplot().close(fig)
     return path
