@@ -4,20 +4,48 @@ VENV := .venv
 BIN := $(VENV)/bin
 DEMO_OUT ?= demo_results
 
-.PHONY: demo lint test bench clean
+.PHONY: demo lint test bench clean lock
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 
-# One stamp per set of extras, redone when pyproject.toml changes.
-$(VENV)/.installed: $(BIN)/python pyproject.toml
-	$(BIN)/python -m pip install -q -e .
+# The exact environment: requirements.lock (the base install) and requirements-test.lock
+# (with the test and Ray extras) pin every package with its hashes; the project itself is
+# installed on top without dependencies (its build backend, setuptools, is in the lock).
+# `make lock` makes both again from pyproject.toml's ranges. LOCK=no installs from the
+# ranges instead (Python 3.10, which the lock's numpy does not support; `make clean` first).
+LOCK ?= yes
+PIP := $(BIN)/python -m pip
+ifeq ($(LOCK),yes)
+INSTALL_BASE = $(PIP) install -q -r requirements.lock
+INSTALL_TEST = $(PIP) install -q -r requirements-test.lock
+SELF = $(PIP) install -q --no-deps --no-build-isolation -e .
+else
+INSTALL_BASE = $(PIP) install -q -e .
+INSTALL_TEST = $(PIP) install -q -e ".[test,ray]"
+SELF = true
+endif
+
+# One stamp per set of extras, redone when pyproject.toml or a lock changes.
+$(VENV)/.installed: $(BIN)/python pyproject.toml requirements.lock
+	$(INSTALL_BASE)
+	$(SELF)
 	touch $@
 
-$(VENV)/.installed-test: $(VENV)/.installed
-	$(BIN)/python -m pip install -q -e ".[test,ray]"
+$(VENV)/.installed-test: $(VENV)/.installed requirements-test.lock
+	$(INSTALL_TEST)
+	$(SELF)
 	touch $@
+
+# uv in its own folder (.lock-tools), never in .venv; --fork-strategy fewest: one version
+# of each package for every Python from 3.11 on, the base lock the test lock's versions.
+UV_COMPILE = .lock-tools/bin/uv pip compile pyproject.toml --universal --fork-strategy fewest \
+	--python-version 3.11 --generate-hashes --quiet
+lock:
+	test -x .lock-tools/bin/uv || { $(PYTHON) -m venv .lock-tools && .lock-tools/bin/python -m pip install -q uv; }
+	$(UV_COMPILE) --extra test --extra ray -o requirements-test.lock
+	$(UV_COMPILE) -c requirements-test.lock -o requirements.lock
 
 demo: $(VENV)/.installed
 	$(BIN)/ebrl demo --out $(DEMO_OUT)

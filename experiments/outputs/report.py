@@ -7,7 +7,7 @@ import pathlib
 import numpy as np
 
 from experiments import paper
-from experiments.running import results
+from experiments.running import lock, results
 from tasks.robots import DRIVES
 
 @functools.cache
@@ -45,6 +45,13 @@ def draw_room(ax, room=None):
     ax.set_aspect("equal")
     ax.set_xticks([])
     ax.set_yticks([])
+
+
+def legend_below(ax, **kwargs):
+    """The legend of a room's axes (draw_room) under them, outside the room: it covers no
+    part of it, the start and the goal above all, in any room."""
+    return ax.legend(loc="upper center", bbox_to_anchor=(0.5, 0.0), borderaxespad=0.3,
+                     frameon=False, **kwargs)
 
 
 def fmt(v, digits=0):
@@ -152,11 +159,13 @@ def claims_table(summary):
 
 # -- figures ----------------------------------------------------------------------
 def save(fig, path, dpi=90):
-    """Lays out, writes and closes a figure; returns path."""
+    """Lays out, writes and closes a figure; returns path. The image is the figure's tight
+    box, so a legend under a room (legend_below) is never cut off."""
     fig.tight_layout()
     try:
         with results.atomic_file(path) as tmp:
-            fig.savefig(tmp, dpi=dpi, format=pathlib.Path(path).suffix[1:] or "png")
+            fig.savefig(tmp, dpi=dpi, format=pathlib.Path(path).suffix[1:] or "png",
+                        bbox_inches="tight", pad_inches=0.05)
     finally:
         pyplot().close(fig)
     return path
@@ -226,6 +235,12 @@ def typical_seed(runs, robot, condition):
 def traces_figure(root, runs, robot, path):
     """Figures 2 and 4: typical successful traces: the median seed's first trial and a
     typical learned one."""
+    save(traces_plot(root, runs, robot), path)
+
+
+def traces_plot(root, runs, robot):
+    """traces_figure's figure, not yet saved: one axes a condition, each its room with its
+    legend below it."""
     plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(11, 3.9))
     for ax, condition in zip(axes, paper.CONDITIONS):
@@ -245,12 +260,12 @@ def traces_figure(root, runs, robot, path):
                 label=f"typical learned trial, #{k + 1} ({len(last) - 1} steps)")
         ax.plot(*last[0], "o", color="tab:blue")
         ax.set_title(f"{'without' if condition == 'random' else 'with'} avoidance, seed {seed}")
-        ax.legend(loc="lower right", fontsize=7)
+        legend_below(ax, fontsize=7)
     drive = next((run["parameters"].get("drive") for (r, _, _), run in runs.items() if r == robot),
                  None)
     figure = {"two_wheel": "the paper's Figure 2: ", "floating": "the paper's Figure 4: "}
     fig.suptitle(f"{figure.get(drive, '')}{robot}: typical traces of successful trials")
-    save(fig, path)
+    return fig
 
 
 def first_vs_learned_figure(summary, path):
@@ -333,6 +348,7 @@ def build(root, room=False):
     runs = results.load_runs(root, room=room)
     failed = results.failed_runs(root)  # named below, never averaged
     summary = results.summarize(runs)
+    summary["locks"] = lock.of_runs(root, runs)  # the environments the runs were made in
     if failed:
         summary["failed"] = [{"run": name, "error": error} for name, error in failed.items()]
     figures = root / "figures"
@@ -354,6 +370,8 @@ def build(root, room=False):
         f"# Report: {root}", "",
         f"{len(runs)} runs. Section 3.6 of Unemi (2000) beside ours; 95% intervals are "
         "percentile bootstraps over seeds.", "",
+        "Environment: requirements.lock " + ", ".join(summary["locks"]) + " (config.json's "
+        "versions.lock: the first 12 hex digits of its sha256).", "",
         *failed_section(summary),
         "## Section 3.6 figures", "", comparison_table(summary), "",
         "## Goals within the budget", "", goals_table(summary), "",

@@ -179,6 +179,8 @@ def versions():
     except (OSError, subprocess.SubprocessError):
         commit, dirty = "", ""
     out["git_commit"] = (commit + ("+dirty" if dirty else "")) or "unknown"
+    from experiments.running import lock
+    out.update(lock.describe())  # the lock file's digest, and whether it is what is installed
     return out
 
 

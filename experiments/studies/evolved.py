@@ -195,7 +195,7 @@ def traces_figure(hand, learner, robot, path):
         ax.plot(*paths[k].T, lw=1.2, color="tab:red",
                 label=f"typical late trial, #{k + 1} ({len(paths[k]) - 1} steps)")
         ax.set_title(f"{label}, seed {seed}: {len(paths)} goals")
-        ax.legend(loc="lower right", fontsize=7)
+        report.legend_below(ax, fontsize=7)
     fig.suptitle(f"{robot}, EBRL with avoidance")
     return report.save(fig, path)
 
