@@ -1,6 +1,12 @@
-"""What several test files share: the repository root and the `ebrl` command run as a real
-process (python -m experiments), as a user runs it."""
+"""What several test files share: the repository root, and the `ebrl` command run as a
+real process (python -m experiments), as a user runs it, or in this process (the unit
+tier's way to check a bad input: the same main(), the same one line and exit status,
+without a second's imports per case)."""
+import contextlib
+import io
+import os
 import pathlib
+import signal
 import subprocess
 import sys
 
@@ -15,3 +21,24 @@ def ebrl(*args, check=False, cwd=ROOT, **kw):
     if check and proc.returncode != 0:
         raise AssertionError(f"ebrl {args} failed:\n{proc.stdout}\n{proc.stderr}")
     return proc
+
+
+def ebrl_here(*args, cwd=ROOT):
+    """`ebrl ARGS` in this process (experiments.cli.main, in cwd, its output captured),
+    as a CompletedProcess: its exit status, stdout and stderr. For commands that refuse
+    their input before any work; a traceback propagates as the exception it is."""
+    from experiments.cli import main
+    out, err = io.StringIO(), io.StringIO()
+    here, handler = os.getcwd(), signal.getsignal(signal.SIGTERM)
+    os.chdir(cwd)
+    try:
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            try:
+                status = main([str(a) for a in args])
+            except SystemExit as e:
+                status = e.code if isinstance(e.code, int) else (0 if e.code is None else 1)
+    finally:
+        os.chdir(here)
+        signal.signal(signal.SIGTERM, handler)
+    return subprocess.CompletedProcess(["ebrl", *map(str, args)], status, out.getvalue(),
+                                       err.getvalue())

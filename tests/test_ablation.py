@@ -1,7 +1,7 @@
 """`ebrl ablate` and the task settings through the real command line."""
 import json
 
-from helpers import ebrl
+from helpers import ebrl, ebrl_here
 
 
 def test_a_task_setting_is_recorded_and_changes_the_run(tmp_path):
@@ -17,7 +17,7 @@ def test_a_task_setting_is_recorded_and_changes_the_run(tmp_path):
     own = tmp_path / "own" / "floating" / "random" / "seed_000"
     assert json.loads((own / "config.json").read_text())["task"]["bump"] == "stop"
     assert (run / "trace.npz").read_bytes() != (own / "trace.npz").read_bytes()
-    bad = ebrl(*base, "--set", "bump=wobble", "--out", tmp_path / "bad")
+    bad = ebrl_here(*base, "--set", "bump=wobble", "--out", tmp_path / "bad")
     assert bad.returncode == 2 and "bump must be one of" in bad.stderr
     assert not (tmp_path / "bad").exists()
 
@@ -45,5 +45,5 @@ def test_ablate_runs_each_cell_where_it_applies_and_resumes(tmp_path):
     again = ebrl(*args)
     assert again.returncode == 0 and again.stdout.strip().endswith("ABLATION.md")
     assert json.loads((out / "ablation.json").read_text()) == data
-    bad = ebrl("ablate", "--readings", "colour", "--out", tmp_path / "x")
+    bad = ebrl_here("ablate", "--readings", "colour", "--out", tmp_path / "x")
     assert bad.returncode == 2 and "unknown reading" in bad.stderr

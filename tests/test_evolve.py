@@ -15,7 +15,7 @@ from ebrl import behaviour as genomes
 from ebrl import intrinsic
 from experiments.studies import evolve, study
 from experiments.running import execution
-from helpers import ROOT, ebrl
+from helpers import ROOT, ebrl, ebrl_here
 
 PAPER_FILES = {"eq8": ROOT / "behaviours" / "paper_eq8.json",
                "eq9-10": ROOT / "behaviours" / "paper_eq9-10.json"}
@@ -177,7 +177,7 @@ def test_run_with_a_behaviour_file_records_it_and_matches_the_default(tmp_path):
     # Another genome never matches those runs: same folder, other parameters.
     other = tmp_path / "other.json"
     genomes.save(dataclasses.replace(genomes.paper("eq8"), bias=0.1), other)
-    proc = ebrl(*common, "--out", tmp_path / "paper", "--behaviour", other)
+    proc = ebrl_here(*common, "--out", tmp_path / "paper", "--behaviour", other)
     assert proc.returncode == 2 and "made with other parameters" in proc.stderr
 
 
@@ -390,7 +390,7 @@ def test_evolve_report_sets_the_evolved_learner_beside_the_papers_rule(tmp_path)
     assert (figures / "evolved_traces_two_wheel.png").is_file()
     page = results_md.read_text()
     assert page.startswith("# R\n\nkept above") and row in page
-    bad = ebrl("evolve-report", "--evolve", evo, "--hand", tmp_path / "nowhere", "--evolved",
+    bad = ebrl_here("evolve-report", "--evolve", evo, "--hand", tmp_path / "nowhere", "--evolved",
                evolved, "--out", tmp_path / "E2.md")
     assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1
     assert "nowhere" in bad.stderr and not (tmp_path / "E2.md").exists()

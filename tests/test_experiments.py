@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import helpers
-from helpers import ROOT
+from helpers import ROOT, ebrl_here
 
 
 ebrl = functools.partial(helpers.ebrl, check=True)  # a failure raises, unless check=False
@@ -313,8 +313,7 @@ def test_a_worker_that_dies_fails_only_its_own_run(clean_run, tmp_path):
 def test_bad_arguments_fail_in_one_line_and_write_nothing(tmp_path, args, message):
     if args[0] == "run":
         args = args + ["--out", str(tmp_path / "out")]
-    proc = subprocess.run([sys.executable, "-m", "experiments", *args], cwd=tmp_path,
-                          capture_output=True, text=True, timeout=120)
+    proc = ebrl_here(*args, cwd=tmp_path)
     assert proc.returncode != 0
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and message in lines[0], proc.stderr
@@ -341,7 +340,7 @@ def test_other_parameters_are_refused_not_overwritten(clean_run, tmp_path):
     import shutil
     out = tmp_path / "results"
     shutil.copytree(clean_run, out)
-    proc = ebrl("run", *SMALL[:-3], "--steps", "500", "--out", out, check=False)
+    proc = ebrl_here("run", *SMALL[:-3], "--steps", "500", "--out", out)
     assert proc.returncode != 0 and "other parameters" in proc.stderr
     assert json.loads((out / "two_wheel/random/seed_000/run.json").read_text())["parameters"]["steps"] == 400
 
@@ -359,7 +358,7 @@ def test_sweep_table_takes_the_default_rows_from_a_baseline_run(clean_run, tmp_p
     assert row.endswith(f"| {goals['min']} / {goals['median']:.1f} |")
     assert table.index(default) < table.index("| 0.4 |")
     # Seeds the baseline lacks: refused in one line, before anything runs.
-    proc = ebrl(*sweep, "--seeds", "0-2", check=False)
+    proc = ebrl_here(*sweep, "--seeds", "0-2")
     assert proc.returncode != 0 and "lacks some of these runs" in proc.stderr
     assert "Traceback" not in proc.stderr
     sweep = tmp_path / "sweeps" / "policy_threshold_0.4"
@@ -377,7 +376,7 @@ def test_rendered_video_has_moving_frames(tmp_path, robot, camera):
     frames = np.stack(list(iio.imiter(video)))
     assert frames.shape[0] >= 30 and frames.shape[1:] == (480, 640, 3)
     assert np.abs(frames[-1].astype(int) - frames[0].astype(int)).mean() > 0.05
-    bad = ebrl("render", "--robot", robot, "--condition", "avoidance", "--seed", "0",
+    bad = ebrl_here("render", "--robot", robot, "--condition", "avoidance", "--seed", "0",
                "--camera", "ceiling", "--out", tmp_path / "x.mp4", check=False)
     assert bad.returncode == 2 and "unknown camera 'ceiling'" in bad.stderr
     assert not (tmp_path / "x.mp4").exists()
@@ -442,6 +441,6 @@ def test_run_with_another_learner(tmp_path, agent):
     groups = {(g["robot"], g["agent"]) for g in summary(out)["groups"]}
     assert groups == {("two_wheel." + agent, agent), ("floating." + agent, agent)}
     assert f"two_wheel.{agent}" in (out / "REPORT.md").read_text()
-    bad = ebrl("run", "--agent", agent, "--set", "policy_threshold=0.1", "--out",
+    bad = ebrl_here("run", "--agent", agent, "--set", "policy_threshold=0.1", "--out",
                tmp_path / "bad", check=False)
     assert bad.returncode == 2 and f"not a parameter of the {agent} agent" in bad.stderr

@@ -7,7 +7,7 @@ import pytest
 
 from experiments.studies import fit, study
 from experiments import paper
-from helpers import ebrl
+from helpers import ebrl, ebrl_here
 import tasks.robots
 
 
@@ -160,7 +160,7 @@ def test_a_tiny_study_runs_resumes_and_reaches_the_runs(tmp_path):
 ])
 def test_bad_fit_arguments_are_one_line_and_write_nothing(tmp_path, args, message):
     out = tmp_path / "fit"
-    proc = ebrl("fit", *args, "--out", out)
+    proc = ebrl_here("fit", *args, "--out", out)
     assert proc.returncode == 2
     assert message in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
     assert not out.exists()

@@ -10,7 +10,7 @@ import pytest
 import models
 import tasks
 from experiments.running import execution
-from helpers import ROOT, ebrl
+from helpers import ROOT, ebrl, ebrl_here
 from tasks import mount, navigation
 from tasks.realisations.wheel_motors import WheelMotorsPhysics
 
@@ -228,7 +228,7 @@ def test_a_bad_mount_on_the_command_line_exits_2_before_any_work(tmp_path):
                     '[action]\nkind = "servos"\n')
     out = tmp_path / "out"
     out.mkdir()
-    proc = ebrl("run", "--robot", str(path), "--condition", "random", "--seeds", "0",
+    proc = ebrl_here("run", "--robot", str(path), "--condition", "random", "--seeds", "0",
                 "--steps", "10", "--out", str(out), "--no-progress")
     assert proc.returncode == 2
     assert proc.stderr.strip().splitlines() == [

@@ -11,7 +11,7 @@ import pytest
 import tasks
 from experiments.running import execution, runner
 from experiments.checks import robotcheck
-from helpers import ROOT, ebrl
+from helpers import ROOT, ebrl, ebrl_here
 from tasks import navigation
 from tasks.protocols import PROTOCOL_VERSION
 
@@ -29,7 +29,7 @@ def test_every_command_takes_its_robots_from_the_registry():
     assert "bump=stop" in readings and "leftover_turn=away" in readings
     for command in (["run"], ["sweep"], ["bench"], ["check"],
                     ["render", "--condition", "random", "--seed", "0", "--out", "x.mp4"]):
-        proc = ebrl(*command, "--robot", "tricycle")
+        proc = ebrl_here(*command, "--robot", "tricycle")
         assert proc.returncode == 2 and "tricycle" in proc.stderr, (command, proc.stderr)
         if command[0] != "render":
             assert "valid: " + ", ".join(tasks.ROBOTS) in proc.stderr, proc.stderr
@@ -143,7 +143,7 @@ def test_a_missing_part_is_one_line_naming_it(tmp_path, robot, drive, edit, miss
     with pytest.raises(navigation.ContractError, match=re.escape(missing)):
         tasks.load(str(path), drive=drive)
     out = tmp_path / "out"
-    proc = ebrl("run", "--robot", path, "--drive", drive, "--out", out)
+    proc = ebrl_here("run", "--robot", path, "--drive", drive, "--out", out)
     lines = proc.stderr.strip().splitlines()
     assert proc.returncode == 2 and len(lines) == 1 and missing in lines[0], proc.stderr
     assert str(path) in lines[0] and not out.exists()
@@ -155,7 +155,7 @@ def test_a_missing_part_is_one_line_naming_it(tmp_path, robot, drive, edit, miss
     (["--robot", "two_wheel", "--drive", "floating"], "has the two_wheel drive"),
 ])
 def test_robot_file_arguments_are_checked(tmp_path, args, message):
-    proc = ebrl("run", *args, "--out", tmp_path / "out", cwd=ROOT)
+    proc = ebrl_here("run", *args, "--out", tmp_path / "out", cwd=ROOT)
     assert proc.returncode == 2 and message in proc.stderr and not (tmp_path / "out").exists()
 
 

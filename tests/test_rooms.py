@@ -11,7 +11,7 @@ import models
 import tasks
 from experiments.outputs import optimal, rendering
 from experiments.running import execution, results, runner
-from helpers import ebrl
+from helpers import ebrl, ebrl_here
 from models import UNIT, rooms
 
 
@@ -77,7 +77,7 @@ def test_bad_maps_on_the_command_line(tmp_path):
                                 "narrower than the robot")):
         bad = tmp_path / f"{robot}.txt"
         bad.write_text(text)
-        proc = ebrl("run", "--robot", robot, "--room", bad, "--out", tmp_path / "out")
+        proc = ebrl_here("run", "--robot", robot, "--room", bad, "--out", tmp_path / "out")
         assert proc.returncode == 2 and not (tmp_path / "out").exists()
         assert len(proc.stderr.strip().splitlines()) == 1
         assert str(bad) in proc.stderr and words in proc.stderr
