@@ -13,13 +13,14 @@ import sys
 import threading
 
 from experiments.commands import (ablate, bench, check, demo, evolve, evolve_report, fit,
-                                  maze_study, render, report, robots, rooms, run, sweep)
+                                  maze_study, multiverse, render, report, robots, rooms, run,
+                                  sweep)
 from experiments.commands.common import INTERRUPTED, USAGE_ERROR, fail
 
 #: The commands in the order `ebrl --help` lists them; each module's add_parser adds its
 #: sub-parser (its arguments) and sets func, its action.
-COMMANDS = (robots, rooms, run, report, render, bench, check, sweep, ablate, fit, evolve,
-            evolve_report, maze_study, demo)
+COMMANDS = (robots, rooms, run, report, render, bench, check, sweep, ablate, multiverse, fit,
+            evolve, evolve_report, maze_study, demo)
 
 
 class _Parser(argparse.ArgumentParser):

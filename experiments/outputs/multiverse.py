@@ -1,0 +1,292 @@
+"""`ebrl multiverse`'s numbers: each universe's twelve figures and ten claims with their
+intervals (its table, multiverse.csv), and across the universes each claim's share and
+each factor's effects on it.
+
+The claims are Section 3.6's ten, as `ebrl report` judges them (experiments.outputs.
+report.claims: the same verdicts, tests/test_multiverse.py), each with a statistic and a
+95% interval, numbered as RESULTS.md numbers them:
+
+- C1, C2, C7, C8 (avoidance cuts first-trial steps, steps per trial): the random walk's
+  mean over the avoidance mean; holds when above 1. The interval resamples seeds, the
+  same seeds for both conditions (a seed gives both conditions the same streams).
+- C3, C4, C9, C10 (learning shrinks trials): the shrink and its interval
+  (results.summarize); holds when the interval lies below 1.
+- C5 (most two-wheel random walks reach fewer than 30 goals in 30,000 steps): the share
+  of runs below 30 goals, Wilson's interval; holds above a half.
+- C6 (every two-wheel avoidance run reaches at least 49 goals): the fewest goals, a
+  percentile bootstrap of the minimum; holds at 49 or more. C5 and C6 are judged at the
+  paper's budget only.
+
+A factor's main effect on a claim is estimated by least squares on the design's ±1
+columns (main effects and, where the universes run allow it, every two-factor
+interaction: at resolution V none is aliased with another), over the universes of the
+design that are complete; for a ratio or a shrink on the log scale (shown as the
+statistic's ratio, alternative over plain), else on the statistic's own scale.
+"""
+import csv
+import dataclasses
+import io
+import math
+import warnings
+
+import numpy as np
+
+from experiments import paper
+from experiments.outputs import report
+from experiments.running import results
+from tasks.robots import DRIVES
+
+BOOTSTRAP = 2000
+SEED = 20240551
+
+
+@dataclasses.dataclass(frozen=True)
+class Claim:
+    """A claim of Section 3.6: its number, robot, what, the paper's value, its bar, and
+    its kind ("ratio", "shrink", "share", "min")."""
+    key: str
+    robot: str
+    what: str
+    paper: float
+    bar: float
+    kind: str
+
+    @property
+    def log(self):
+        return self.kind in ("ratio", "shrink")
+
+    def label(self):
+        return f"{self.key}: {self.robot}: {self.what}"
+
+
+def _claims():
+    out, number = [], 1
+    for robot in ("two_wheel", "floating"):
+        ref = {c: paper.RESULTS[(robot, c)] for c in paper.CONDITIONS}
+        for key, what in (("first_trial_steps", "avoidance cuts first-trial steps"),
+                          ("steps_per_trial", "avoidance cuts steps per trial")):
+            out.append(Claim(f"C{number}", robot, what, ref["random"][key]["mean"]
+                             / ref["avoidance"][key]["mean"], 1.0, "ratio"))
+            number += 1
+        for c in paper.CONDITIONS:
+            out.append(Claim(f"C{number}", robot, f"{c}: learning shrinks trials",
+                             ref[c]["shrink"], 1.0, "shrink"))
+            number += 1
+        if robot == "two_wheel":
+            goals = paper.TWO_WHEEL_GOALS
+            out.append(Claim(f"C{number}", robot, "random: most runs reach fewer than 30 goals",
+                             goals["random_below_30"] / paper.SEEDS, 0.5, "share"))
+            out.append(Claim(f"C{number + 1}", robot, "avoidance: every run reaches at least "
+                             f"{goals['avoidance_min']} goals", goals["avoidance_min"],
+                             goals["avoidance_min"], "min"))
+            number += 2
+    return tuple(out)
+
+
+#: The ten claims, C1-C10.
+CLAIMS = _claims()
+#: The twelve figures: (robot, condition, figure).
+FIGURES = tuple((r, c, f) for r in ("two_wheel", "floating") for c in paper.CONDITIONS
+                for f in ("first_trial_steps", "steps_per_trial", "shrink"))
+
+
+def wilson(k, n, z=1.959963984540054):
+    """Wilson's 95% interval of a share k / n ([0, 1] for n = 0)."""
+    if n == 0:
+        return [0.0, 1.0]
+    p = k / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return [max(0.0, centre - half), min(1.0, centre + half)]
+
+
+def _per_seed(runs, robot, condition, metric):
+    seeds = sorted(s for r, c, s in runs if (r, c) == (robot, condition))
+    return seeds, np.array([np.nan if (v := runs[(robot, condition, s)]["metrics"][metric])
+                            is None else v for s in seeds], dtype=np.float64)
+
+
+def _paired_ratio(runs, robot, metric, rng):
+    """(random mean / avoidance mean, its 95% interval resampling seeds) or (None, None)."""
+    seeds, a = _per_seed(runs, robot, "random", metric)
+    seeds_b, b = _per_seed(runs, robot, "avoidance", metric)
+    if seeds != seeds_b or np.all(np.isnan(a)) or np.all(np.isnan(b)):
+        return None, None
+    value = float(np.nanmean(a) / np.nanmean(b))
+    idx = rng.integers(0, len(a), size=(BOOTSTRAP, len(a)))
+    with warnings.catch_warnings(), np.errstate(invalid="ignore", divide="ignore"):
+        warnings.simplefilter("ignore", RuntimeWarning)  # a resample with no goal reached
+        ratios = np.nanmean(a[idx], axis=1) / np.nanmean(b[idx], axis=1)
+    ratios = ratios[np.isfinite(ratios)]
+    ci = [float(x) for x in np.percentile(ratios, [2.5, 97.5])] if len(ratios) else None
+    return value, ci
+
+
+def claim_values(runs, summary):
+    """{claim key: {"value", "ci", "holds"}} of one universe (value None where it cannot be
+    computed or judged; C5 and C6 only at the paper's two-wheel budget)."""
+    rng = np.random.default_rng(SEED)
+    groups = {(g["robot"], g["condition"]): g for g in summary["groups"]}
+    out = {}
+    for c in CLAIMS:
+        value, ci, holds = None, None, None
+        if c.kind == "ratio":
+            metric = "first_trial_steps" if "first" in c.what else "steps_per_trial"
+            value, ci = _paired_ratio(runs, c.robot, metric, rng)
+            holds = None if value is None else value > c.bar
+        elif c.kind == "shrink":
+            g = groups[(c.robot, c.what.split(":")[0])]
+            value, ci = g["shrink"], g["shrink_ci95"]
+            holds = None if value is None else (ci[1] < 1.0 if ci else value < 1.0)
+        else:
+            cond = "random" if c.kind == "share" else "avoidance"
+            g = groups[(c.robot, cond)]
+            if g["steps"] == DRIVES[c.robot].budget:
+                _, goals = _per_seed(runs, c.robot, cond, "goals")
+                if c.kind == "share":
+                    k = int(np.sum(goals < 30))
+                    value, ci, holds = k / len(goals), wilson(k, len(goals)), k > len(goals) / 2
+                else:
+                    idx = rng.integers(0, len(goals), size=(BOOTSTRAP, len(goals)))
+                    value = float(goals.min())
+                    ci = [float(x) for x in np.percentile(goals[idx].min(axis=1), [2.5, 97.5])]
+                    holds = value >= c.bar
+        out[c.key] = {"value": value, "ci": ci, "holds": holds}
+    return out
+
+
+def figure_values(summary):
+    """{(robot, condition, figure): (value, ci)} of the twelve figures."""
+    out = {}
+    for g in summary["groups"]:
+        for f in ("first_trial_steps", "steps_per_trial"):
+            out[(g["robot"], g["condition"], f)] = (g[f]["mean"], g[f]["ci95"])
+        out[(g["robot"], g["condition"], "shrink")] = (g["shrink"], g["shrink_ci95"])
+    return out
+
+
+def universe_record(runs):
+    """A complete universe's summary, figures and claims (None for an incomplete one)."""
+    if runs is None:
+        return None
+    summary = results.summarize(runs)
+    return {"summary": summary, "figures": figure_values(summary),
+            "claims": claim_values(runs, summary),
+            "seconds": float(sum(r.get("seconds", 0.0) for r in runs.values()))}
+
+
+def agrees_with_report(record):
+    """Whether a universe's verdicts are `ebrl report`'s (report.claims, in its order)."""
+    theirs = [ok for _, _, ok in report.claims(record["summary"])]
+    ours = [record["claims"][c.key]["holds"] for c in CLAIMS
+            if record["claims"][c.key]["holds"] is not None]
+    return [bool(x) for x in theirs] == [bool(x) for x in ours]
+
+
+# -- the table ---------------------------------------------------------------------
+def _fmt(v):
+    if v is None:
+        return ""
+    if isinstance(v, float):
+        return f"{v:.10g}"
+    return str(v)
+
+
+def _code_text(universe, k):
+    codes = {r: c[k] for r, c in universe.codes.items()}
+    if len(set(codes.values())) == 1:
+        return f"{next(iter(codes.values())):+d}"
+    return ";".join(f"{r}:{c:+d}" for r, c in codes.items())
+
+
+def table(factor_list, universes, records):
+    """multiverse.csv's text: one row per universe: its name, design row, marks, each
+    factor's code, each robot's readings, the twelve figures and the ten claims with
+    their intervals ("" where not computed; complete 0 for a universe with runs missing)."""
+    from tasks.robots import PAPER_ROBOTS
+    names = {r: sorted({n for u in universes for n in u.readings(r)}) for r in PAPER_ROBOTS}
+    head = ["universe", "row", "marks", "complete"] + [f.key for f in factor_list]
+    head += [f"{r}.{n}" for r in PAPER_ROBOTS for n in names[r]]
+    for r, c, f in FIGURES:
+        head += [f"{r}.{c}.{f}", f"{r}.{c}.{f}.lo", f"{r}.{c}.{f}.hi"]
+    for c in CLAIMS:
+        head += [c.key, f"{c.key}.lo", f"{c.key}.hi", f"{c.key}.holds"]
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(head)
+    for u in universes:
+        rec = records.get(u.name)
+        row = [u.name, "" if u.row is None else u.row + 1, " ".join(u.marks), int(rec is not None)]
+        row += [_code_text(u, k) for k in range(len(factor_list))]
+        for r in PAPER_ROBOTS:
+            mine = u.readings(r)
+            row += [_fmt(mine.get(n)) for n in names[r]]
+        for key in FIGURES:
+            value, ci = rec["figures"].get(key, (None, None)) if rec else (None, None)
+            row += [_fmt(value), _fmt(ci[0] if ci else None), _fmt(ci[1] if ci else None)]
+        for c in CLAIMS:
+            x = rec["claims"][c.key] if rec else {"value": None, "ci": None, "holds": None}
+            ci = x["ci"]
+            row += [_fmt(x["value"]), _fmt(ci[0] if ci else None), _fmt(ci[1] if ci else None),
+                    "" if x["holds"] is None else int(x["holds"])]
+        w.writerow(row)
+    return buf.getvalue()
+
+
+# -- across the universes ------------------------------------------------------------
+def transform(claim, values):
+    v = np.asarray(values, dtype=np.float64)
+    return np.log(v) if claim.log else v
+
+
+def fit_effects(codes, y):
+    """Least squares of y on the ±1 codes (rows x k): {"mains": [k effects], "pairs":
+    {(i, j): effect}} (an effect is twice the coefficient: alternative less plain), pairs
+    only where the universes identify every two-factor interaction, mains only where they
+    identify the main effects; None where not even those."""
+    from experiments.studies import design
+    codes, y = np.asarray(codes, dtype=np.float64), np.asarray(y, dtype=np.float64)
+    if len(y) == 0:
+        return None
+    for interactions in (True, False):
+        x, names = design.model_matrix(codes, interactions)
+        if np.linalg.matrix_rank(x) == x.shape[1]:
+            coef = np.linalg.lstsq(x, y, rcond=None)[0]
+            effects = {n: 2 * c for n, c in zip(names, coef) if n}
+            return {"mains": [effects[(i,)] for i in range(codes.shape[1])],
+                    "pairs": {n: e for n, e in effects.items() if len(n) == 2}}
+    return None
+
+
+def analyse(factor_list, chosen, universes, records):
+    """Per claim: the universes judged, the share holding with its interval, and the
+    chosen factors' effects on its statistic and on whether it holds ({claim key: ...})."""
+    index = [i for i, f in enumerate(factor_list) if f in chosen]
+    design_rows = [u for u in universes if u.row is not None and records.get(u.name)]
+    out = {}
+    for c in CLAIMS:
+        judged = [u for u in design_rows if records[u.name]["claims"][c.key]["holds"] is not None]
+        k = sum(records[u.name]["claims"][c.key]["holds"] for u in judged)
+        valued = [u for u in judged if (records[u.name]["claims"][c.key]["value"] or 0) > 0
+                  or not c.log]
+        codes = [[u.codes[c.robot][i] for i in index] for u in valued]
+        y = transform(c, [records[u.name]["claims"][c.key]["value"] for u in valued])
+        held = [float(records[u.name]["claims"][c.key]["holds"]) for u in judged]
+        out[c.key] = {
+            "judged": len(judged), "holds": int(k), "share": k / len(judged) if judged else None,
+            "share_ci": wilson(k, len(judged)) if judged else None,
+            "effects": fit_effects(codes, y),
+            "holds_effects": fit_effects([[u.codes[c.robot][i] for i in index] for u in judged],
+                                         held),
+        }
+    return out
+
+
+def effect_text(claim, effect):
+    """An effect as read: x1.23 (a log-scale statistic's ratio), else +0.12 (share) or +3.0
+    goals."""
+    if effect is None:
+        return "-"
+    if claim.log:
+        return f"x{math.exp(effect):.2f}"
+    return f"{effect:+.2f}" if claim.kind == "share" else f"{effect:+.1f}"

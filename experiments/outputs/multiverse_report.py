@@ -1,0 +1,310 @@
+"""`ebrl multiverse`'s report: MULTIVERSE.md (the draft of RESULTS.md's section "How much
+the conclusions depend on the open details") and a specification curve per claim.
+
+A specification curve (Simonsohn, Simmons and Nelson 2020) is one claim's statistic in
+every universe, sorted, with its interval, the paper's value and the claim's bar, the
+literal and the current protocols marked, and below it the grid of which factor is at
+its alternative level in each universe.
+"""
+import dataclasses
+import pathlib
+import warnings
+
+import numpy as np
+
+from experiments.outputs import multiverse as mv
+from experiments.outputs import report
+from experiments.running import results
+
+#: Machines of this many cores for the Ray estimate.
+RAY_CORES = 16
+
+
+def _value(records, u, claim):
+    return records[u.name]["claims"][claim.key]
+
+
+def spec_curve(claim, factor_list, chosen, universes, records, path):
+    """The claim's specification curve as a PNG at path; None when no universe has its
+    statistic."""
+    from experiments.studies import multiverse as study
+    pts = [u for u in universes if records.get(u.name) and _value(records, u, claim)["value"]
+           is not None and (_value(records, u, claim)["value"] > 0 or not claim.log)]
+    if not pts:
+        return None
+    pts.sort(key=lambda u: _value(records, u, claim)["value"])
+    rows = [i for i, f in enumerate(factor_list)
+            if f in chosen or any(u.codes[claim.robot][i] > 0 for u in pts)]
+    plt = report.pyplot()
+    n = len(pts)
+    fig, (ax, grid) = plt.subplots(
+        2, 1, sharex=True, figsize=(min(max(6.0, 0.06 * n + 3.5), 18.0), 3.2 + 0.22 * len(rows)),
+        gridspec_kw={"height_ratios": [3.0, 0.22 * len(rows) + 0.3], "hspace": 0.05})
+    x = np.arange(n)
+    vals = np.array([_value(records, u, claim)["value"] for u in pts], dtype=np.float64)
+    cis = [_value(records, u, claim)["ci"] or [v, v] for u, v in zip(pts, vals)]
+    held = [bool(_value(records, u, claim)["holds"]) for u in pts]
+    colours = ["tab:green" if h else "tab:red" for h in held]
+    lo = np.array([c[0] for c in cis])
+    if claim.log:
+        lo = np.where(lo > 0, lo, vals)
+    ax.vlines(x, lo, [c[1] for c in cis], colors=colours, alpha=0.45, lw=1.2)
+    ax.scatter(x, vals, c=colours, s=10, zorder=3)
+    for mark, style in (("literal", dict(marker="*", s=160, label="literal protocol")),
+                        ("current", dict(marker="D", s=60, label="current protocol"))):
+        at = [i for i, u in enumerate(pts) if mark in u.marks]
+        if at:
+            ax.scatter(at, vals[at], facecolors="none", edgecolors="k", zorder=4, lw=1.2, **style)
+            for i in at:
+                grid.axvline(i, color="k", lw=0.8, alpha=0.6)
+    ax.axhline(claim.paper, ls="--", color="0.35", lw=1, label=f"paper ({claim.paper:.3g})")
+    ax.axhline(claim.bar, ls=":", color="tab:red", lw=1, label=f"the claim's bar ({claim.bar:g})")
+    if claim.log:
+        from matplotlib.ticker import FuncFormatter
+        ax.set_yscale("log")
+        for axis in (ax.yaxis.set_major_formatter, ax.yaxis.set_minor_formatter):
+            axis(FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.tick_params(axis="y", which="minor", labelsize=6)
+    ax.set_title(f"{claim.label()}: holds in {sum(held)} of {n} universes shown", fontsize=9,
+                 pad=20)
+    ax.set_ylabel({"ratio": "random / avoidance", "shrink": "shrink", "share": "share < 30 goals",
+                   "min": "fewest goals"}[claim.kind], fontsize=8)
+    ax.legend(fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.0), ncol=4, frameon=False,
+              borderaxespad=0.1)
+    cells = np.array([[pts[j].codes[claim.robot][i] > 0 for j in range(n)] for i in rows])
+    grid.pcolormesh(np.arange(n + 1) - 0.5, np.arange(len(rows) + 1) - 0.5, cells,
+                    cmap="Greys", vmin=0, vmax=1.6, edgecolors="w", linewidth=0.3 if n < 80 else 0)
+    grid.set_ylim(len(rows) - 0.5, -0.5)
+    grid.set_yticks(range(len(rows)))
+    grid.set_yticklabels([factor_list[i].key + (" (inert)" if study.levels(
+        factor_list[i], claim.robot).source == "inert" else "") for i in rows], fontsize=7)
+    grid.set_xticks([])
+    grid.set_xlabel("universes, by the statistic (grid: dark = the factor's alternative level)",
+                    fontsize=8)
+    with warnings.catch_warnings():  # tight_layout and the grid's axes: harmless
+        warnings.simplefilter("ignore", UserWarning)
+        return report.save(fig, path)
+
+
+# -- MULTIVERSE.md ---------------------------------------------------------------------
+def _v(x, log):
+    if x is None:
+        return "-"
+    return f"{x:.2f}" if log or abs(x) < 10 else f"{x:,.0f}"
+
+
+def _claim_cell(claim, x):
+    if x is None or x["value"] is None:
+        return "-"
+    ci = x["ci"]
+    digits = claim.log or claim.kind == "share"
+    text = _v(x["value"], digits) + (f" [{_v(ci[0], digits)}, {_v(ci[1], digits)}]" if ci else "")
+    return f"{text} ({'holds' if x['holds'] else 'fails'})"
+
+
+def _level_text(values):
+    return ", ".join(f"{k}={v}" for k, v in values.items()) or "-"
+
+
+def factor_table(factor_list, chosen):
+    from experiments.studies import multiverse as study
+    from tasks.robots import PAPER_ROBOTS
+    lines = ["| factor | in the design | " + " | ".join(f"{r}: plain -> alternative"
+                                                      for r in PAPER_ROBOTS)
+             + " | the paper's words |", "|---|:-:|" + "---|" * len(PAPER_ROBOTS) + "---|"]
+    for f in factor_list:
+        cells = []
+        for r in PAPER_ROBOTS:
+            lv = study.levels(f, r)
+            changed = {k: v for k, v in lv.alternative.items() if lv.plain[k] != v}
+            cells.append("inert" if lv.source == "inert" else
+                         f"{_level_text({k: lv.plain[k] for k in changed})} -> "
+                         f"{_level_text(changed)} ({lv.source})")
+        lines.append(f"| `{f.key}`: {f.label} | {'yes' if f in chosen else 'plain'} | "
+                     + " | ".join(cells) + f" | {f.sentence} |")
+    return "\n".join(lines)
+
+
+def _verdict(a):
+    if not a["judged"]:
+        return "not judged"
+    if a["holds"] == a["judged"]:
+        return "holds in every universe"
+    if a["holds"] == 0:
+        return "fails in every universe"
+    return "holds in part"
+
+
+def _deciding(a, factor_list, chosen):
+    """The chosen factor whose level moves the claim's verdict most, as read."""
+    e = a["holds_effects"]
+    if e is None or a["holds"] in (0, a["judged"]):
+        return "-"
+    keys = [f.key for f in factor_list if f in chosen]
+    i = int(np.argmax(np.abs(e["mains"])))
+    return f"`{keys[i]}` ({e['mains'][i]:+.0%} of universes holding at its alternative)"
+
+
+def claims_table(analysis, factor_list, chosen, universes, records):
+    marked = {m: next((u for u in universes if m in u.marks), None) for m in ("literal", "current")}
+    lines = ["| claim | paper | literal protocol | current protocol | holds in (95% CI) | "
+             "across the readings | the reading that decides it most |",
+             "|---|---:|---|---|---|---|---|"]
+    for c in mv.CLAIMS:
+        a = analysis[c.key]
+        cells = [_claim_cell(c, (records.get(u.name) or {}).get("claims", {}).get(c.key)
+                             if u else None) for u in marked.values()]
+        share = "-" if a["share"] is None else \
+            f"{a['holds']}/{a['judged']} ({a['share_ci'][0]:.0%}-{a['share_ci'][1]:.0%})"
+        lines.append(f"| {c.label()} | {_v(c.paper, c.log or c.kind == 'share')} | "
+                     + " | ".join(cells) + f" | {share} | {_verdict(a)} | "
+                     f"{_deciding(a, factor_list, chosen)} |")
+    return "\n".join(lines)
+
+
+def effects_tables(analysis, factor_list, chosen, top=3):
+    keys = [f.key for f in factor_list if f in chosen]
+    lines = ["Main effects (a ratio or a shrink: the statistic at the alternative level over "
+             "the plain one; the share: its difference; the fewest goals: goals):", "",
+             "| factor | " + " | ".join(c.key for c in mv.CLAIMS) + " |",
+             "|---|" + "---:|" * len(mv.CLAIMS)]
+    for i, k in enumerate(keys):
+        row = []
+        for c in mv.CLAIMS:
+            e = analysis[c.key]["effects"]
+            row.append(mv.effect_text(c, e["mains"][i]) if e else "-")
+        lines.append(f"| `{k}` | " + " | ".join(row) + " |")
+    lines += ["", f"The {top} largest two-factor interactions on each claim's statistic "
+              "(as its main effects read):", ""]
+    for c in mv.CLAIMS:
+        e = analysis[c.key]["effects"]
+        if not e or not e["pairs"]:
+            lines.append(f"- {c.key}: not estimated (the universes run do not identify them)")
+            continue
+        biggest = sorted(e["pairs"].items(), key=lambda kv: -abs(kv[1]))[:top]
+        lines.append(f"- {c.key}: " + "; ".join(f"`{keys[i]}` x `{keys[j]}` {mv.effect_text(c, v)}"
+                                                 for (i, j), v in biggest))
+    return "\n".join(lines)
+
+
+def _hours(seconds):
+    return f"{seconds / 3600:.1f} h" if seconds >= 3600 else f"{seconds / 60:.1f} min"
+
+
+def cost_text(n_runs, seconds, timing, bench, steps_by_robot):
+    """The cost section's lines: the wall time these calls took, the runs' own compute
+    (seconds: each distinct complete run's, as its run.json records it) and the floor it
+    sets on the workers used, `ebrl bench`'s per-step cost times the runs' steps where
+    measured (bench), and a Ray cluster's time."""
+    made = [s for s in timing if s.get("runs_made") or s.get("interrupted")]
+    wall = sum(s["seconds"] for s in made)
+    workers = max((s["workers"] for s in made), default=1)
+    compute = float(sum(seconds))
+    stopped = sum(1 for s in made if s.get("interrupted"))
+    lines = [f"- Runs: {n_runs:,} distinct (a run that universes share is made once), "
+             f"{len(seconds):,} complete; made by {len(made)} call(s) of `ebrl multiverse`"
+             + (f" ({stopped} stopped and resumed)" if stopped else "")
+             + f" in **{_hours(wall)}** of wall time on {workers} worker(s)."]
+    if seconds:
+        lines.append(f"- Their compute, as each run records it: {_hours(compute)} of one core "
+                     f"({compute / len(seconds):.1f} s a run on average, the longest "
+                     f"{max(seconds):.0f} s); the floor on {workers} worker(s): "
+                     f"{_hours(compute / workers)}.")
+    if bench:
+        total = sum(steps_by_robot[r] * bench[r]["fused_loop"] * 1e-6 for r in steps_by_robot)
+        per = ", ".join(f"{r} {b['fused_loop']:.0f} us a step" for r, b in bench.items())
+        lines.append(f"- `ebrl bench`'s cost of a step (its fused loop, the runs' own: {per}) "
+                     f"times the {n_runs:,} runs' steps: {_hours(total)} of one core; the "
+                     f"floor on {workers} worker(s): {_hours(total / workers)}.")
+        compute = compute or total
+    if compute:
+        longest = max(seconds, default=0.0)
+        cells = [f"{n} x {RAY_CORES} cores: {_hours(max(compute / (n * RAY_CORES), longest))}"
+                 for n in (1, 4, 16, 64)]
+        lines.append(f"- On a Ray cluster (`--backend ray`, docs/cluster.md: a run is a task "
+                     f"of one CPU) of N machines of {RAY_CORES} cores: about the compute over "
+                     f"N x {RAY_CORES}, never under the longest run, plus each node's first "
+                     "compile of the kernels: " + "; ".join(cells) + ".")
+    return lines
+
+
+@dataclasses.dataclass
+class Context:
+    """What MULTIVERSE.md says: the factors, the design, the universes and their records,
+    the analysis, the seeds and steps, the runs' commits, the costs, the failed runs."""
+    factor_list: tuple
+    chosen: tuple
+    design: object
+    universes: list
+    records: dict
+    analysis: dict
+    seeds: list
+    steps: object
+    n_runs: int
+    seconds: list
+    commits: list
+    timing: list
+    bench: dict
+    steps_by_robot: dict
+    figures: dict
+    failed: list
+
+
+def markdown(ctx):
+    from tasks.protocols import PROTOCOL_VERSION
+    seeds = ctx.seeds
+    seed_text = f"{seeds[0]}-{seeds[-1]}" if seeds == list(range(seeds[0], seeds[-1] + 1)) \
+        else ",".join(map(str, seeds))
+    design_rows = [u for u in ctx.universes if u.row is not None]
+    complete = sum(1 for u in ctx.universes if ctx.records.get(u.name))
+    current = next(u for u in ctx.universes if "current" in u.marks)
+    lines = ["# How much the conclusions depend on the open details", "",
+             f"Protocol {PROTOCOL_VERSION}; runs made at commit(s) {', '.join(ctx.commits) or '-'}; "
+             f"seeds {seed_text} ({len(seeds)} per universe, robot and condition); "
+             + ("the paper's budgets" if ctx.steps is None else f"{ctx.steps:,} steps a run (a cap, "
+                "not the paper's budgets: C5 and C6 are not judged)") + ".", "",
+             f"**The design**: {ctx.design.name()} over the {len(ctx.chosen)} factors below "
+             f"(generators {', '.join(ctx.design.generators) or 'none'}; {ctx.design.source}), "
+             "so that no main effect or two-factor interaction is aliased with another; "
+             f"{len(design_rows)} of its {ctx.design.runs} universes run"
+             + ("" if current.row is not None else ", and the current protocol beside them")
+             + f"; {complete} complete. Universe u001 is every factor plain: the literal "
+             f"protocol; the current protocol is {current.name}. Every universe runs both "
+             "paper robots in both conditions.", "",
+             "## The factors", "",
+             "Plain: the literal protocol's reading. Alternative: the adopted protocol's where "
+             "it differs (adopted), else the other reading the text allows (alternative). "
+             "docs/interpretation.md, \"The multiverse\", gives each one's reason.", "",
+             factor_table(ctx.factor_list, ctx.chosen), "",
+             "## The claims across the universes", "",
+             "Each claim's statistic with its 95% interval in the literal and the current "
+             "protocol, and the share of the design's complete universes in which it holds "
+             "(Wilson's 95% interval); the reading that decides it most: the factor whose "
+             "alternative level changes the share of universes holding it most (a main "
+             "effect on the verdict).", "",
+             claims_table(ctx.analysis, ctx.factor_list, ctx.chosen, ctx.universes, ctx.records),
+             "", "## Effects on each claim's statistic", "",
+             effects_tables(ctx.analysis, ctx.factor_list, ctx.chosen), "",
+             "## Specification curves", "",
+             "Each claim's statistic in every complete universe, sorted (green: holds; red: "
+             "fails), with its interval, the paper's value (dashed) and the claim's bar "
+             "(dotted); the literal protocol a star, the current a diamond; below, the "
+             "factors at their alternative level (dark).", ""]
+    for key, path in ctx.figures.items():
+        lines += [f"![{key}]({path})", ""]
+    lines += ["## Cost", ""] + cost_text(ctx.n_runs, ctx.seconds, ctx.timing, ctx.bench,
+                                         ctx.steps_by_robot) + [""]
+    if ctx.failed:
+        lines += ["## Failed runs (their universes left out)", ""]
+        lines += [f"- {n}: {e}" for n, e in ctx.failed] + [""]
+    lines += ["The table: multiverse.csv (one row per universe: its factors' codes, each "
+              "robot's readings, the twelve figures and the ten claims with their intervals).",
+              ""]
+    return "\n".join(lines)
+
+
+def write(out, ctx):
+    path = pathlib.Path(out) / "MULTIVERSE.md"
+    results.atomic_write(path, markdown(ctx))
+    return path
+
