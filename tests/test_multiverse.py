@@ -288,3 +288,18 @@ def test_a_tiny_design_runs_and_resumes_without_redoing_work(tmp_path):
     sessions = json.loads((out / "timing.json").read_text())
     assert sessions[-1]["runs_made"] == 0 and sessions[-1]["on_disk"] == len(runs)
     assert (out / "multiverse.csv").read_text().splitlines() == rows
+
+
+def test_the_docs_list_every_factor_with_its_readings():
+    from helpers import ROOT
+    text = (ROOT / "docs" / "interpretation.md").read_text()
+    section = text.split("## The multiverse (`ebrl multiverse`)")[1].split("\n## ")[0]
+    rows = {line.split("|")[1].strip().strip("`"): line for line in section.splitlines()
+            if line.startswith("| `")}
+    assert list(rows) == [f.key for f in multiverse.FACTORS]
+    for f in multiverse.FACTORS:
+        readings_cell = rows[f.key].split("|")[2]
+        for names in f.readings.values():
+            assert all(f"`{n}`" in readings_cell for n in names), (f.key, readings_cell)
+        quote = f.sentence.split('"')[1].split(" ...")[0]
+        assert quote in rows[f.key], (f.key, quote)

@@ -188,6 +188,8 @@ def effects_tables(analysis, factor_list, chosen, top=3):
 
 
 def _hours(seconds):
+    if seconds < 60:
+        return f"{seconds:.0f} s"
     return f"{seconds / 3600:.1f} h" if seconds >= 3600 else f"{seconds / 60:.1f} min"
 
 
