@@ -259,8 +259,9 @@ def fit_effects(codes, y):
 
 
 def analyse(factor_list, chosen, universes, records):
-    """Per claim: the universes judged, the share holding with its interval, and the
-    chosen factors' effects on its statistic and on whether it holds ({claim key: ...})."""
+    """Per claim: the universes judged, the share holding with its interval, the chosen
+    factors' effects on its statistic, and the share holding at each factor's two levels
+    ({claim key: ...})."""
     index = [i for i, f in enumerate(factor_list) if f in chosen]
     design_rows = [u for u in universes if u.row is not None and records.get(u.name)]
     out = {}
@@ -271,13 +272,18 @@ def analyse(factor_list, chosen, universes, records):
                   or not c.log]
         codes = [[u.codes[c.robot][i] for i in index] for u in valued]
         y = transform(c, [records[u.name]["claims"][c.key]["value"] for u in valued])
-        held = [float(records[u.name]["claims"][c.key]["holds"]) for u in judged]
+        by_level = []  # each chosen factor: the share holding with it plain, alternative
+        for i in index:
+            shares = []
+            for level in (-1, 1):
+                at = [records[u.name]["claims"][c.key]["holds"] for u in judged
+                      if u.codes[c.robot][i] == level]
+                shares.append(sum(at) / len(at) if at else None)
+            by_level.append(shares)
         out[c.key] = {
             "judged": len(judged), "holds": int(k), "share": k / len(judged) if judged else None,
             "share_ci": wilson(k, len(judged)) if judged else None,
-            "effects": fit_effects(codes, y),
-            "holds_effects": fit_effects([[u.codes[c.robot][i] for i in index] for u in judged],
-                                         held),
+            "effects": fit_effects(codes, y), "holds_by_level": by_level,
         }
     return out
 

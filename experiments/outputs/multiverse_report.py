@@ -60,11 +60,11 @@ def spec_curve(claim, factor_list, chosen, universes, records, path):
     ax.axhline(claim.paper, ls="--", color="0.35", lw=1, label=f"paper ({claim.paper:.3g})")
     ax.axhline(claim.bar, ls=":", color="tab:red", lw=1, label=f"the claim's bar ({claim.bar:g})")
     if claim.log:
-        from matplotlib.ticker import FuncFormatter
+        from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
         ax.set_yscale("log")
-        for axis in (ax.yaxis.set_major_formatter, ax.yaxis.set_minor_formatter):
-            axis(FuncFormatter(lambda v, _: f"{v:g}"))
-        ax.tick_params(axis="y", which="minor", labelsize=6)
+        ax.yaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+        ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.yaxis.set_minor_formatter(NullFormatter())
     ax.set_title(f"{claim.label()}: holds in {sum(held)} of {n} universes shown", fontsize=9,
                  pad=20)
     ax.set_ylabel({"ratio": "random / avoidance", "shrink": "shrink", "share": "share < 30 goals",
@@ -135,14 +135,21 @@ def _verdict(a):
     return "holds in part"
 
 
-def _deciding(a, factor_list, chosen):
-    """The chosen factor whose level moves the claim's verdict most, as read."""
-    e = a["holds_effects"]
-    if e is None or a["holds"] in (0, a["judged"]):
-        return "-"
+def deciding(a, factor_list, chosen):
+    """(key, share plain, share alternative) of the chosen factor whose level moves the
+    share of universes holding the claim most; None for a claim that holds or fails in
+    every universe judged."""
+    if not a["judged"] or a["holds"] in (0, a["judged"]):
+        return None
     keys = [f.key for f in factor_list if f in chosen]
-    i = int(np.argmax(np.abs(e["mains"])))
-    return f"`{keys[i]}` ({e['mains'][i]:+.0%} of universes holding at its alternative)"
+    gaps = [abs(p - q) if p is not None and q is not None else -1 for p, q in a["holds_by_level"]]
+    i = int(np.argmax(gaps))
+    return (keys[i], *a["holds_by_level"][i])
+
+
+def _deciding(a, factor_list, chosen):
+    d = deciding(a, factor_list, chosen)
+    return "-" if d is None else f"`{d[0]}`: holds in {d[1]:.0%} plain, {d[2]:.0%} alternative"
 
 
 def claims_table(analysis, factor_list, chosen, universes, records):
@@ -159,6 +166,59 @@ def claims_table(analysis, factor_list, chosen, universes, records):
         lines.append(f"| {c.label()} | {_v(c.paper, c.log or c.kind == 'share')} | "
                      + " | ".join(cells) + f" | {share} | {_verdict(a)} | "
                      f"{_deciding(a, factor_list, chosen)} |")
+    return "\n".join(lines)
+
+
+def plain_words(analysis, factor_list, chosen):
+    """The claims in words: which hold in every universe judged, which in none, which in
+    part (and the reading that decides each most), which are not judged."""
+    every, none, part, unjudged = [], [], [], []
+    for c in mv.CLAIMS:
+        a = analysis[c.key]
+        if not a["judged"]:
+            unjudged.append(c.key)
+        elif a["holds"] == a["judged"]:
+            every.append(c.key)
+        elif a["holds"] == 0:
+            none.append(c.key)
+        else:
+            d = deciding(a, factor_list, chosen)
+            part.append(f"{c.key} in {a['holds']} of {a['judged']} (most decided by `{d[0]}`: "
+                        f"{d[1]:.0%} of universes with it plain, {d[2]:.0%} with its "
+                        "alternative)")
+    lines = []
+    for head, items in (("Hold in every universe", every), ("Hold in none", none),
+                        ("Hold in part", part), ("Not judged", unjudged)):
+        if items:
+            lines.append(f"- {head}: {'; '.join(items)}.")
+    return "\n".join(lines)
+
+
+def figures_table(universes, records):
+    """The twelve figures: the paper's, the literal and the current protocol's, and their
+    spread over the design's complete universes."""
+    from experiments import paper
+    marked = [next((u for u in universes if m in u.marks), None) for m in ("literal", "current")]
+    rows = [u for u in universes if u.row is not None and records.get(u.name)]
+    lines = ["| robot | condition | figure | paper | literal | current | universes: median "
+             "(5%-95%) | within 1.5x of the paper |", "|---|---|---|---:|---:|---:|---|---:|"]
+    for key in mv.FIGURES:
+        robot, condition, figure = key
+        ref = paper.RESULTS[(robot, condition)][figure]
+        ref = ref["mean"] if isinstance(ref, dict) else ref
+        log = figure == "shrink"
+        cells = [_v((records.get(u.name) or {}).get("figures", {}).get(key, (None,))[0], log)
+                 if u else "-" for u in marked]
+        values = np.array([records[u.name]["figures"][key][0] for u in rows
+                           if records[u.name]["figures"].get(key, (None,))[0] is not None])
+        if len(values):
+            q = np.percentile(values, [5, 50, 95])
+            spread = f"{_v(q[1], log)} ({_v(q[0], log)}-{_v(q[2], log)})"
+            within = f"{int(np.sum((values >= ref / 1.5) & (values <= ref * 1.5)))}/{len(values)}"
+        else:
+            spread, within = "-", "-"
+        lines.append(f"| {robot} | {condition} | {figure.replace('_', ' ')} | {_v(ref, log)} | "
+                     + " | ".join(cells) + f" | {spread} | {within} |")
     return "\n".join(lines)
 
 
@@ -285,7 +345,10 @@ def markdown(ctx):
              "alternative level changes the share of universes holding it most (a main "
              "effect on the verdict).", "",
              claims_table(ctx.analysis, ctx.factor_list, ctx.chosen, ctx.universes, ctx.records),
-             "", "## Effects on each claim's statistic", "",
+             "", "In plain words:", "", plain_words(ctx.analysis, ctx.factor_list, ctx.chosen),
+             "", "## The twelve figures across the universes", "",
+             figures_table(ctx.universes, ctx.records), "",
+             "## Effects on each claim's statistic", "",
              effects_tables(ctx.analysis, ctx.factor_list, ctx.chosen), "",
              "## Specification curves", "",
              "Each claim's statistic in every complete universe, sorted (green: holds; red: "

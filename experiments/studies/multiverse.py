@@ -61,6 +61,11 @@ def _both(*names):
     return {"two_wheel": names, "floating": names}
 
 
+def _one(name, alternative, label, sentence):
+    """A factor of one reading of both robots, keyed by the reading's name."""
+    return Factor(name, label, _both(name), ((name, alternative),), sentence)
+
+
 #: The factors, hand-listed (docs/interpretation.md, "The multiverse", has each with the
 #: reason its alternative is a reading of the text). Every value is checked against the
 #: registry (tests/test_multiverse.py).
@@ -72,40 +77,35 @@ FACTORS = (
            (("policy_threshold", 0.3), ("utility_cutoff", 1e-4)),
            'Section 2.3: "If the agent cannot find any element of enough value of the above '
            'measure, it takes random or intrinsic behavior."'),
-    Factor("initial_reliability", "a new memory element's reliability",
-           _both("initial_reliability"), (("initial_reliability", 0.0),),
-           'Section 2.1: "Reliability of each memory element decreases in each simulation '
-           'step ... Reliability is modified also in the process of learning"; Section 4: '
-           '"The initial values of learning variables should also be set up appropriately"'),
-    Factor("eq7_signal", "eq 7's r: the reward, or the reward less the expected one",
-           _both("eq7_signal"), (("eq7_signal", "surprise_measure"),),
-           'Section 2.4: "the reliability of memory element that the agent referred for '
-           'decision should be modified according to the difference between real and '
-           'expected reward values"'),
-    Factor("eq7_walk", "eq 7's walk back: undiscounted, or discounted as eq 6's",
-           _both("eq7_walk"), (("eq7_walk", "discounted"),),
-           'Section 2.4: "This operation is also done by following the backward links '
-           'starting from the memory element employed to decide the last action."'),
-    Factor("eq7_scope", "eq 7 walks to the episode's start, or changes deciding elements only",
-           _both("eq7_scope"), (("eq7_scope", "decided_only"),),
-           'Section 2.4: "the reliability of memory element that the agent referred for '
-           'decision should be modified"'),
-    Factor("forgetting_link", "forgetting joins the episode across the gap, or cuts it",
-           _both("forgetting_link"), (("forgetting_link", "cut"),),
-           'Section 2.1: "An episode is a sequence of memory elements ... it forgets a memory '
-           'element of the lowest reliability"'),
-    Factor("recall_candidates", "recall candidates: every element, or earlier trials' only",
-           _both("recall_candidates"), (("recall_candidates", "past"),),
-           'Section 2.2: "the other memory elements similar to the current sensory input are '
-           'also candidates of recall table elements"'),
-    Factor("exploration", "an exploration step: the fallback's action, or a random action",
-           _both("exploration"), (("exploration", "random"),),
-           'Section 2.3: "it should sometimes do a type of exploration behavior ignoring the '
-           'above decision process"'),
-    Factor("random_in_avoidance", "the 20% random action replaces, or is added to, avoidance",
-           _both("random_in_avoidance"), (("random_in_avoidance", "add"),),
-           'Section 3.4: "We should introduce some probability of random action to avoid this '
-           'drawback. Here we set the probability to be 20%"'),
+    _one("initial_reliability", 0.0, "a new memory element's reliability",
+         'Section 2.1: "Reliability of each memory element decreases in each simulation step '
+         '... Reliability is modified also in the process of learning"; Section 4: "The '
+         'initial values of learning variables should also be set up appropriately"'),
+    _one("eq7_signal", "surprise_measure",
+         "eq 7's r: the reward, or the reward less the expected one",
+         'Section 2.4: "the reliability of memory element that the agent referred for decision '
+         'should be modified according to the difference between real and expected reward '
+         'values"'),
+    _one("eq7_walk", "discounted", "eq 7's walk back: undiscounted, or discounted as eq 6's",
+         'Section 2.4: "This operation is also done by following the backward links starting '
+         'from the memory element employed to decide the last action."'),
+    _one("eq7_scope", "decided_only",
+         "eq 7 walks to the episode's start, or changes deciding elements only",
+         'Section 2.4: "the reliability of memory element that the agent referred for decision '
+         'should be modified"'),
+    _one("forgetting_link", "cut", "forgetting joins the episode across the gap, or cuts it",
+         'Section 2.1: "An episode is a sequence of memory elements ... it forgets a memory '
+         'element of the lowest reliability"'),
+    _one("recall_candidates", "past", "recall candidates: every element, or earlier trials' only",
+         'Section 2.2: "the other memory elements similar to the current sensory input are also '
+         'candidates of recall table elements"'),
+    _one("exploration", "random", "an exploration step: the fallback's action, or a random action",
+         'Section 2.3: "it should sometimes do a type of exploration behavior ignoring the above '
+         'decision process"'),
+    _one("random_in_avoidance", "add",
+         "the 20% random action replaces, or is added to, avoidance",
+         'Section 3.4: "We should introduce some probability of random action to avoid this '
+         'drawback. Here we set the probability to be 20%"'),
     Factor("body", "the bodies' open values: the plain body, or the adopted (fitted) one",
            {"two_wheel": ("radius", "blocked_move"),
             "floating": ("radius", "action_noise", "velocity_noise", "velocity_code")},
