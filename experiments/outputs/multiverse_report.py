@@ -362,9 +362,9 @@ def markdown(ctx):
     if ctx.failed:
         lines += ["## Failed runs (their universes left out)", ""]
         lines += [f"- {n}: {e}" for n, e in ctx.failed] + [""]
-    lines += ["The table: multiverse.csv (one row per universe: its factors' codes, each "
-              "robot's readings, the twelve figures and the ten claims with their intervals).",
-              ""]
+    lines += ["The table: multiverse.csv (one row per universe, in the order they run: its "
+              "design row in standard order, its factors' codes, each robot's readings, the "
+              "twelve figures and the ten claims with their 95% intervals).", ""]
     return "\n".join(lines)
 
 
