@@ -23,10 +23,11 @@ def ebrl(*args, check=False, cwd=ROOT, **kw):
     return proc
 
 
-def ebrl_here(*args, cwd=ROOT):
+def ebrl_here(*args, cwd=ROOT, check=False):
     """`ebrl ARGS` in this process (experiments.cli.main, in cwd, its output captured),
     as a CompletedProcess: its exit status, stdout and stderr. For commands that refuse
-    their input before any work; a traceback propagates as the exception it is."""
+    their input before any work; a traceback propagates as the exception it is. check as
+    ebrl's."""
     from experiments.cli import main
     out, err = io.StringIO(), io.StringIO()
     here, handler = os.getcwd(), signal.getsignal(signal.SIGTERM)
@@ -40,5 +41,8 @@ def ebrl_here(*args, cwd=ROOT):
     finally:
         os.chdir(here)
         signal.signal(signal.SIGTERM, handler)
-    return subprocess.CompletedProcess(["ebrl", *map(str, args)], status, out.getvalue(),
+    proc = subprocess.CompletedProcess(["ebrl", *map(str, args)], status, out.getvalue(),
                                        err.getvalue())
+    if check and status != 0:
+        raise AssertionError(f"ebrl {args} failed:\n{proc.stdout}\n{proc.stderr}")
+    return proc

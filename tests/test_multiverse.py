@@ -288,6 +288,21 @@ def test_a_tiny_design_runs_and_resumes_without_redoing_work(tmp_path):
     sessions = json.loads((out / "timing.json").read_text())
     assert sessions[-1]["runs_made"] == 0 and sessions[-1]["on_disk"] == len(runs)
     assert (out / "multiverse.csv").read_text().splitlines() == rows
+    # the first universe is the literal protocol's runs, the current one `ebrl run`'s, bit
+    # for bit
+    d, universes = multiverse.universes(multiverse.factors(), 2)
+    for universe, protocol in ((universes[0], "literal"), (universes[-1], "adopted")):
+        assert ebrl("run", "--protocol", protocol, "--seeds", "0-1", "--steps", "300",
+                    "--workers", "2", "--no-progress", "--out", tmp_path / protocol,
+                    check=True).returncode == 0
+        for robot in PAPER_ROBOTS:
+            for condition in ("random", "avoidance"):
+                root = multiverse.root_of(out, execution.RunSpec(
+                    robot, condition, 0, 300, universe.overrides(robot, condition)))
+                for seed in ("seed_000", "seed_001"):
+                    mine = root / robot / condition / seed / "trace.npz"
+                    theirs = tmp_path / protocol / robot / condition / seed / "trace.npz"
+                    assert mine.read_bytes() == theirs.read_bytes(), (protocol, mine)
 
 
 def test_the_docs_list_every_factor_with_its_readings():

@@ -22,8 +22,9 @@ def add_parser(subparsers):
                    help="comma-separated factor keys (default: all; the others stay plain; "
                         "docs/interpretation.md, \"The multiverse\")")
     p.add_argument("--universes", type=arguments.up_to(), default=None, metavar="K",
-                   help="run the first K universes of the design (default: all), and the "
-                        "current protocol beside them")
+                   help="run the first K universes of the design (default: all; the first "
+                        "is the literal protocol), and the current protocol where it is not "
+                        "among them")
     p.add_argument("--seeds", type=arguments.seeds, default=SEEDS,
                    help="seeds per universe (default: 11000-11019, docs/seeds.md)")
     p.add_argument("--steps", type=arguments.up_to(validate.MAX_STEPS), default=None,

@@ -214,7 +214,7 @@ def select(keys=None):
     every = factors()
     if keys is None:
         return every
-    known = {f.key for f in every}
+    known = [f.key for f in every]
     unknown = next((k for k in keys if k not in known), None)
     if unknown is not None or not keys:
         raise ValueError(f"unknown factor {unknown or ''!r}; valid: {', '.join(known)}")
