@@ -1,5 +1,5 @@
 """The `ebrl` command (also `python -m experiments`): robots, run, report, render, bench,
-check, sweep, ablate, fit, evolve, demo.
+check, sweep, ablate, multiverse, fit, evolve, demo.
 
 Exit status: 0 done; 1 some runs failed (each recorded in its run.json, named by the
 report, retried by a rerun); 2 a bad argument (one line, nothing written), or a results
