@@ -332,19 +332,39 @@ def test_bad_arguments_fail_in_one_line_and_write_nothing(tmp_path, args, messag
 
 
 @pytest.mark.slow
-def test_a_corrupted_run_is_named_never_averaged(clean_run, tmp_path):
+def test_a_damaged_run_is_named_skipped_and_made_again_with_the_same_bits(clean_run, tmp_path):
+    """docs/failures.md, "A damaged run folder": `ebrl report` skips each damaged run with
+    one line naming its folder and counts them in REPORT.md; `ebrl run` moves its files
+    into damaged-<time>/ (never deleted) and makes it again, bit for bit a clean run's."""
+    import math
     import shutil
     out = tmp_path / "results"
     shutil.copytree(clean_run, out)
-    bad = out / "floating" / "random" / "seed_001" / "run.json"
-    bad.write_text(bad.read_text()[:40])
-    before = (out / "summary.json").read_bytes()
-    for args in (["report", out], ["run", *SMALL, "--out", out]):
-        proc = ebrl(*args, check=False)
-        assert proc.returncode != 0
-        assert str(bad) in proc.stderr and "corrupted" in proc.stderr
-        assert "Traceback" not in proc.stderr
-    assert (out / "summary.json").read_bytes() == before  # nothing overwritten
+    cut = out / "floating" / "random" / "seed_001"
+    (cut / "run.json").write_text((cut / "run.json").read_text()[:40])
+    short = out / "two_wheel" / "avoidance" / "seed_000"
+    (short / "trace.npz").write_bytes((short / "trace.npz").read_bytes()[:200])
+    nan = out / "floating" / "avoidance" / "seed_000"
+    run = json.loads((nan / "run.json").read_text())
+    run["metrics"]["goals"] = math.nan
+    (nan / "run.json").write_text(json.dumps(run))
+    damaged = {folder: {p.name: p.read_bytes() for p in folder.iterdir()}
+               for folder in (cut, short, nan)}
+    proc = ebrl("report", out)
+    assert "Traceback" not in proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 3 and all(line.startswith("ebrl: warning: ") for line in lines)
+    for folder, said in ((cut, "run.json is not JSON"), (short, "trace.npz cannot be read"),
+                         (nan, "run.json: metrics.goals is NaN")):
+        assert any(f"{folder}: damaged run: {said}" in line for line in lines), "\n".join(lines)
+    assert "## Damaged runs: 3, skipped" in (out / "REPORT.md").read_text()
+    assert len(summary(out)["damaged"]) == 3
+    proc = ebrl("run", *SMALL, "--out", out)
+    assert proc.stdout.strip().splitlines()[-1].startswith("3 runs made, 5 already on disk")
+    assert arrays(out) == arrays(clean_run) and summary(out) == summary(clean_run)
+    for folder, files in damaged.items():  # set aside, whole
+        (aside,) = folder.glob("damaged-*")
+        assert {p.name: p.read_bytes() for p in aside.iterdir()} == files
 
 
 @pytest.mark.slow

@@ -345,12 +345,15 @@ def build(root, room=False):
     path. room: only that room's runs (None: the paper's; False: every room's, each
     robot label's runs in its own room, models.rooms)."""
     root = pathlib.Path(root)
-    runs = results.load_runs(root, room=room)
+    damaged = {}  # run folders that cannot be read: skipped, one line each, counted below
+    runs = results.load_runs(root, room=room, damaged=damaged)
     failed = results.failed_runs(root)  # named below, never averaged
     summary = results.summarize(runs)
     summary["locks"] = lock.of_runs(root, runs)  # the environments the runs were made in
     if failed:
         summary["failed"] = [{"run": name, "error": error} for name, error in failed.items()]
+    if damaged:
+        summary["damaged"] = [{"run": name, "reason": e.reason} for name, e in damaged.items()]
     figures = root / "figures"
     figures.mkdir(exist_ok=True)
     robots = sorted({k[0] for k in runs}, key=lambda r: (results.robot_order(r), r))
@@ -372,7 +375,7 @@ def build(root, room=False):
         "percentile bootstraps over seeds.", "",
         "Environment: requirements.lock " + ", ".join(summary["locks"]) + " (config.json's "
         "versions.lock: the first 12 hex digits of its sha256).", "",
-        *failed_section(summary),
+        *failed_section(summary), *damaged_section(summary),
         "## Section 3.6 figures", "", comparison_table(summary), "",
         "## Goals within the budget", "", goals_table(summary), "",
         "## Qualitative claims", "", claims_table(summary), *extra, "",
@@ -396,6 +399,17 @@ def failed_section(summary, heading="##"):
              + results.advice((f["error"] for f in failed), "run the command that made them "
                               "again") + ".",
              ""] + [f"- `{f['run']}`: {f['error']}" for f in failed] + [""])
+
+
+def damaged_section(summary):
+    """REPORT.md's list of the run folders skipped because their files cannot be read."""
+    damaged = summary.get("damaged")
+    if not damaged:
+        return []
+    return ([f"## Damaged runs: {len(damaged)}, skipped", "",
+             "Their files cannot be read; `ebrl run` moves them into the run folder's "
+             "damaged-<time>/ and makes the run again (docs/failures.md).", ""]
+            + [f"- `{d['run']}`: {d['reason']}" for d in damaged] + [""])
 
 
 def sweep_table(out, param, rows, failed=()):
