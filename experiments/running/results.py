@@ -281,6 +281,10 @@ def load_runs(root, specs=None, room=False, damaged=None):
         raise ResultsError(f"no results folder at {root}")
     paths = (sorted(root.glob("*/*/seed_*/run.json")) if specs is None
              else [run_dir(root, spec) / "run.json" for spec in specs])
+    missing = [p for p in paths if not p.exists()]
+    if specs is not None and missing:  # runs asked for by name: each must be on disk
+        raise ResultsError(f"no run at {missing[0]}"
+                           + (f" (and {len(missing) - 1} more)" if len(missing) > 1 else ""))
     complete, failed, broken = _scan(root, [p for p in paths if p.exists()])
     for error in broken.values():
         warn(f"{error}; skipped (`ebrl run` moves its files aside and makes it again)")
