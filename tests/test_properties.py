@@ -21,8 +21,8 @@ from helpers import ROOT
 from models import rooms
 from tasks import mount
 
-#: Few examples each (EBRL_PROPERTY_EXAMPLES=N for a longer search by hand), no example
-#: database written: the tests stay fast and leave nothing behind.
+#: Few examples each (EBRL_PROPERTY_EXAMPLES=N for a longer search by hand), so the tests
+#: stay fast; no example database (hypothesis' own cache, .hypothesis/, is git-ignored).
 EXAMPLES = int(os.environ.get("EBRL_PROPERTY_EXAMPLES", "60"))
 FEW = settings(max_examples=EXAMPLES, deadline=None, database=None,
                suppress_health_check=[HealthCheck.function_scoped_fixture,
