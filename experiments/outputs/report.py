@@ -7,7 +7,8 @@ import pathlib
 import numpy as np
 
 from experiments import paper
-from experiments.running import results
+from experiments.outputs import verdicts
+from experiments.running import provenance, results
 from tasks.robots import DRIVES
 
 @functools.cache
@@ -287,8 +288,10 @@ def publish(root, results_md, figures_dir):
     for png in sorted((root / "figures").glob("*.png")):
         copy(png, figures_dir / png.name)
     rel = os.path.relpath(figures_dir, results_md.parent)
-    block = [BEGIN, "", *failed_section(summary, "###"),
+    block = [BEGIN, "", *provenance.lines(summary["provenance"]),
+             *failed_section(summary, "###"),
              "### Section 3.6, the paper against ours", "", comparison_table(summary), "",
+             *verdicts.section(summary["tests"], "###"),
              "### Goals within the budget", "", goals_table(summary), "",
              "### Qualitative claims", "", claims_table(summary), ""]
     if "optimal" in summary:
@@ -330,8 +333,11 @@ def build(root, room=False):
     robot label's runs in its own room, models.rooms)."""
     root = pathlib.Path(root)
     runs = results.load_runs(root, room=room)
+    prov = provenance.of(runs, root)  # refuses to pool different protocols or parameters
     failed = results.failed_runs(root)  # named below, never averaged
     summary = results.summarize(runs)
+    summary["provenance"] = prov
+    summary["tests"] = verdicts.tested(summary)
     if failed:
         summary["failed"] = [{"run": name, "error": error} for name, error in failed.items()]
     figures = root / "figures"
@@ -353,8 +359,10 @@ def build(root, room=False):
         f"# Report: {root}", "",
         f"{len(runs)} runs. Section 3.6 of Unemi (2000) beside ours; 95% intervals are "
         "percentile bootstraps over seeds.", "",
+        *provenance.lines(prov),
         *failed_section(summary),
         "## Section 3.6 figures", "", comparison_table(summary), "",
+        *verdicts.section(summary["tests"]),
         "## Goals within the budget", "", goals_table(summary), "",
         "## Qualitative claims", "", claims_table(summary), *extra, "",
         "## Figures", "",
