@@ -23,11 +23,14 @@ if TYPE_CHECKING:  # tasks is imported where a spec needs it, not with this modu
     from tasks.robots import Robot
 
 #: Bump when a change alters what a run computes, so stale results are not reused.
-#: 6: issue 37's rules (the 20% random action Section 3.4's Gaussian, one learner for both
-#: robots: policy threshold 0.3, initial reliability 1); 5: stage 1's readings, eq 2-4 by
-#: reciprocals; 4: the adopted readings per drive,
+#: 7: issue 48's rules kept whole (every random action Section 3.4's Gaussian; one fallback,
+#: the 20% replacing; the planar two-wheel body: radius 1.5, a blocked move refused, the
+#: commanded turn; fitted on seeds 7000-7099); 6: issue 37's rules (the 20% random action
+#: Section 3.4's Gaussian, one learner for both robots: policy threshold 0.3, initial
+#: reliability 1); 5: stage 1's readings, eq 2-4 by reciprocals; 4: the adopted readings
+#: per drive,
 #: diff_drive's Euler; 3: float64 similarity (CHANGELOG.md: each version, its commit).
-PROTOCOL_VERSION = 6
+PROTOCOL_VERSION = 7
 #: Positions are stored as int16 hundredths of a unit.
 TRACE_SCALE = 100.0
 #: The end of a first-trial run's label (RunSpec.first_trial): "two_wheel.first_trial".
