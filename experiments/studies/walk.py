@@ -35,6 +35,7 @@ import sys
 import numpy as np
 from numba import njit
 
+from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from experiments import paper
 from experiments.outputs import verdicts
 from experiments.studies import grid
