@@ -46,6 +46,12 @@ def test_summary_and_report_name_protocol_commit_seeds_and_parameters(made):
                      "commits": [commit]}
     report = (made / "REPORT.md").read_text()
     assert f"Protocol version {protocol.PROTOCOL_VERSION}; commit `{commit}`" in report
+    # the figures' tests beside it (experiments.outputs.verdicts), in both files
+    tests = summary["tests"]
+    assert tests["margin"] == [2 / 3, 1.5] and tests["alpha"] == 0.05
+    assert [r["figure"] for r in tests["figures"]] == ["first-trial steps", "steps per trial"]
+    assert "## The figures tested against the paper" in report
+    assert "| two_wheel | random | first-trial steps | 6,087 (5,789, 49) |" in report
     assert f"| two_wheel | random | {protocol.PROTOCOL_VERSION} | 0-1 | `{group['parameters_sha256']}` |" \
         in report
 
