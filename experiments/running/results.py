@@ -411,7 +411,9 @@ def summarize(runs):
             "shrink": shrink, "shrink_ci95": shrink_ci,
             "goals": {"min": int(min(goals)), "median": float(np.median(goals)),
                       "max": int(max(goals)), "mean": float(np.mean(goals)),
-                      "below_30": int(sum(g < 30 for g in goals))},
+                      "below_30": int(sum(g < 30 for g in goals)),
+                      "below_49": int(sum(g < paper.TWO_WHEEL_GOALS["avoidance_min"]
+                                          for g in goals))},
             "memory_decision_rate": float(np.mean([
                 runs[(robot, condition, s)]["memory_decisions"]
                 / runs[(robot, condition, s)]["parameters"]["steps"] for s in seeds])),
