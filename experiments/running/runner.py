@@ -405,13 +405,15 @@ def _import_ray():
 
 def _init_ray(ray, workers):
     """Connects to the cluster at RAY_ADDRESS, or starts one here with `workers` CPUs."""
-    address = os.environ.get("RAY_ADDRESS") or None
+    # Without RAY_ADDRESS, "local": ray.init(address=None) would join whichever cluster this
+    # machine started last (Ray reads it from its temp folder), not start ours.
+    address = os.environ.get("RAY_ADDRESS") or "local"
     # The test-only hooks travel to workers that a cluster started elsewhere runs.
     env = dict(_SINGLE_THREAD, **{k: os.environ[k] for k in (TEST_FAIL, TEST_CRASH, TEST_HOLD)
                                   if os.environ.get(k)})
     kwargs = {"address": address, "include_dashboard": False, "log_to_driver": False,
               "logging_level": logging.WARNING, "runtime_env": {"env_vars": env}}
-    if address is None:
+    if address == "local":
         kwargs["num_cpus"] = workers or os.cpu_count() or 1
     ray.init(**kwargs)
 
