@@ -8,6 +8,7 @@ import helpers
 import models
 import tasks
 from ebrl.agent import DECIDERS
+from experiments.outputs import overlays as geometry
 from experiments.outputs import rendering, report
 from experiments.running import results
 
@@ -94,26 +95,26 @@ def test_video_overlays_cover_neither_start_nor_goal(flip, tmp_path):
             assert not (covered & start).any(), f"{camera}: an overlay covers the start"
             if flip == "as drawn" and camera == "top":
                 # The room tells: the legend's usual corner (bottom right) holds the goal.
-                left, bottom, right, top = rendering.box_at(
-                    "legend", "bottom right", rendering.legend_size(len(legend)), H, W)
+                left, bottom, right, top = geometry.box_at(
+                    "legend", "bottom right", geometry.legend_size(len(legend)), H, W)
                 assert goal[H - top:H - bottom, left:right].any()
     finally:
         env.close()
 
 
 def test_placement_keeps_the_preferred_corners_where_they_are_free():
-    sizes = {"legend": rendering.legend_size(4), "caption": (400, 33), "label": (100, 33)}
-    assert rendering.place(sizes, [], H, W) == {
+    sizes = {"legend": geometry.legend_size(4), "caption": (400, 33), "label": (100, 33)}
+    assert geometry.place(sizes, [], H, W) == {
         "legend": "bottom right", "caption": "top left", "label": "bottom left"}
     # A goal in the bottom right: the legend to the bottom left, the label (whose corner
     # the legend took, and the goal the next) to the first free corner, the top right.
-    got = rendering.place(sizes, [(W - 60, 20, W - 20, 60)], H, W)
+    got = geometry.place(sizes, [(W - 60, 20, W - 20, 60)], H, W)
     assert got == {"legend": "bottom left", "caption": "top left", "label": "top right"}
     # A goal clear of the label's box in the bottom right: the label goes there.
-    got = rendering.place(sizes, [(W - 200, 45, W - 150, 90)], H, W)
+    got = geometry.place(sizes, [(W - 200, 45, W - 150, 90)], H, W)
     assert got == {"legend": "bottom left", "caption": "top left", "label": "bottom right"}
     # The start at the top left too: the caption to the top right.
-    got = rendering.place(sizes, [(W - 60, 20, W - 20, 60), (20, H - 60, 60, H - 20)], H, W)
+    got = geometry.place(sizes, [(W - 60, 20, W - 20, 60), (20, H - 60, 60, H - 20)], H, W)
     assert got["caption"] == "top right" and got["legend"] == "bottom left"
 
 

@@ -11,7 +11,7 @@ import pytest
 import tasks
 from ebrl.agent import DECIDERS
 from experiments.running import execution
-from experiments.outputs import rendering
+from experiments.outputs import overlays, rendering
 from models import UNIT
 
 #: The slow tier (pyproject.toml's markers): videos rendered.
@@ -70,7 +70,7 @@ def test_each_overlay_changes_the_frame_only_where_it_belongs(two_wheel):
     assert label.any() and not label[: H - 40].any() and not label[:, W // 2:].any()
     rows_rgb = [(n, rendering.DECIDER_RGB[n]) for n in DECIDERS]
     legend = changed(rendering.frame(physics, legend=rows_rgb), plain)
-    margin, row_h, _, panel = rendering.LEGEND_BOX
+    margin, row_h, _, panel = overlays.LEGEND_BOX
     top = H - (margin + len(rows_rgb) * row_h + 8)
     assert legend.any() and not legend[: top - 2].any() and not legend[:, : W - panel - margin - 2].any()
 
@@ -105,7 +105,7 @@ def test_legend_and_path_colours_match_the_decision_record():
     # The legend's swatches, in DECIDERS order, have exactly the deciders' colours.
     rgb8 = {n: np.round(255 * np.array(rendering.DECIDER_RGB[n])).astype(np.uint8)
             for n in DECIDERS}
-    swatches = rendering.legend_swatches(H, W, len(DECIDERS))
+    swatches = overlays.legend_swatches(H, W, len(DECIDERS))
     for name, (left, bottom, size, _) in zip(DECIDERS, swatches):
         assert np.array_equal(image[H - 1 - (bottom + size // 2), left + size // 2], rgb8[name])
 
