@@ -16,6 +16,10 @@ def add_parser(subparsers):
     p.add_argument("--room", type=arguments.room, default=False, metavar="NAME|FILE",
                    help="only the runs in this room (default: every room's runs, each "
                         f"robot's rows in its own room; {rooms.DEFAULT}: the paper's)")
+    p.add_argument("--literal", type=pathlib.Path, default=None, metavar="DIR",
+                   help="with --results: the literal protocol's results folder (its "
+                        "summary.json); writes the headline (the paper, the literal protocol "
+                        "and this folder's) into the page and the README.md beside it")
     p.set_defaults(func=run)
 
 
@@ -23,6 +27,12 @@ def _check(args):
     validate.results_folder(args.dir, writable=True)
     validate.output_folder(args.dir / "figures", "the figures folder")
     arguments.check_results(args)
+    if args.literal is not None:
+        if args.results is None:
+            raise ValueError("--literal needs --results (the page its headline goes in)")
+        if not (args.literal / "summary.json").is_file():
+            raise ValueError(f"--literal {args.literal}: no summary.json there (make it with "
+                             f"`ebrl report {args.literal}`)")
 
 
 def run(args):
@@ -36,6 +46,9 @@ def run(args):
         path = report.build(args.dir, args.room)
         if args.results is not None:
             print(f"published: {report.publish(args.dir, args.results, args.figures)}")
+        if args.literal is not None:
+            for page in _headline(args):
+                print(f"headline: {page}")
         failed = results.failed_runs(args.dir)
     except results.ResultsError as e:
         return fail(str(e))
@@ -44,3 +57,18 @@ def run(args):
         return fail(failed_line(sorted(failed.items()), "failed and not averaged")
                     + "; " + results.advice(failed.values(), "rerun `ebrl run`"), RUNS_FAILED)
     return 0
+
+
+def _headline(args):
+    """The headline from this folder's and the literal folder's summary.json, written into
+    the page and its README (experiments.outputs.headline); the literal summary kept
+    beside the page."""
+    import json
+
+    from experiments.outputs import headline
+    from experiments.running import results
+    literal = (args.literal / "summary.json").read_bytes()
+    results.atomic_write(args.results.parent / headline.LITERAL_SUMMARY, literal)
+    current = json.loads((args.dir / "summary.json").read_text())
+    return headline.publish(args.results, current, json.loads(literal))
+

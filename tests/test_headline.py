@@ -1,0 +1,69 @@
+"""The headline of README.md and RESULTS.md (experiments.outputs.headline): generated from
+the committed summaries, never typed, and written by `ebrl report --literal`."""
+import json
+
+import pytest
+
+import helpers
+from experiments.outputs import headline
+from helpers import ROOT, ebrl_here
+
+
+def _committed():
+    current = json.loads((ROOT / "summary.json").read_text())
+    literal = json.loads((ROOT / headline.LITERAL_SUMMARY).read_text())
+    return current, literal
+
+
+def test_the_pages_headline_is_the_committed_summaries():
+    text = "\n".join(headline.block(*_committed()))
+    for page in ("README.md", "RESULTS.md"):
+        assert text in (ROOT / page).read_text(), (
+            f"{page}'s headline is not summary.json's: rerun `ebrl report results --results "
+            f"RESULTS.md --literal results-literal` (docs/running.md)")
+
+
+def test_the_headline_rows_carry_the_papers_figures_and_both_protocols():
+    current, literal = _committed()
+    rows = headline.rows(current, literal)
+    assert len(rows) == 12  # 8 tested figures and 4 shrinks
+    first = rows[0]
+    assert first[:4] == ("two_wheel", "random", "first-trial steps", "6,087 (5,789, 49)")
+    assert first[4]["ours"]["mean"] == next(
+        g for g in literal["groups"] if (g["robot"], g["condition"]) == ("two_wheel", "random")
+    )["first_trial_steps"]["mean"]
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--literal", "x"], "--literal needs --results"),
+    (["--results", "{tmp}/R.md", "--literal", "{tmp}"], "no summary.json there"),
+])
+def test_literal_refusals(tmp_path, args, message):
+    made = tmp_path / "made"
+    made.mkdir()
+    (made / "summary.json").write_text("{}")
+    args = [a.format(tmp=tmp_path) for a in args]
+    proc = ebrl_here("report", made, *args)
+    assert proc.returncode == 2 and message in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.slow
+def test_report_literal_writes_the_headline_into_the_page_and_its_readme(tmp_path):
+    out = tmp_path / "results"
+    helpers.ebrl("run", "--robot", "two_wheel", "--condition", "all", "--seeds", "0-1",
+                 "--steps", "300", "--workers", "1", "--no-progress", "--out", out, check=True)
+    page, readme = tmp_path / "site" / "RESULTS.md", tmp_path / "site" / "README.md"
+    page.parent.mkdir()
+    from experiments.outputs import report
+    page.write_text(f"# top\n\n{headline.BEGIN}\nold\n{headline.END}\n\n"
+                    f"{report.BEGIN}\n{report.END}\nkept\n")
+    readme.write_text(f"# top\n\n{headline.BEGIN}\nold\n{headline.END}\n\nkept\n")
+    helpers.ebrl("report", out, "--results", page, "--figures", tmp_path / "figs",
+                 "--literal", out, check=True)
+    summary = json.loads((out / "summary.json").read_text())
+    text = "\n".join(headline.block(summary, summary))
+    for p in (page, readme):
+        body = p.read_text()
+        assert text in body and "\nold\n" not in body and body.endswith("kept\n")
+    assert json.loads((page.parent / headline.LITERAL_SUMMARY).read_text()) == summary
