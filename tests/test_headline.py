@@ -67,3 +67,30 @@ def test_report_literal_writes_the_headline_into_the_page_and_its_readme(tmp_pat
         body = p.read_text()
         assert text in body and "\nold\n" not in body and body.endswith("kept\n")
     assert json.loads((page.parent / headline.LITERAL_SUMMARY).read_text()) == summary
+
+
+def _section(text, heading):
+    """The text of RESULTS.md's section `heading` (to the next "## ")."""
+    rest = text.split(f"\n## {heading}\n", 1)[1]
+    return rest.split("\n## ", 1)[0]
+
+
+def test_the_results_prose_quotes_only_numbers_of_the_generated_blocks():
+    """No figure typed by hand: a number of two or more digits in the prose of RESULTS.md's
+    answer and results sections is one of the page's generated blocks."""
+    import re
+
+    from experiments.outputs import report
+    text = (ROOT / "RESULTS.md").read_text()
+    generated = "".join(part.split(end, 1)[0] for begin, end in
+                        ((headline.BEGIN, headline.END), (report.BEGIN, report.END))
+                        for part in text.split(begin)[1:])
+    assert generated.strip()
+    for heading in ("The answer", "Results (protocol 7, seeds 9000-9099)"):
+        prose = _section(text, heading)
+        for begin, end in ((headline.BEGIN, headline.END), (report.BEGIN, report.END)):
+            if begin in prose:
+                prose = prose.split(begin)[0] + prose.split(end, 1)[1]
+        for number in re.findall(r"\d[\d,]*(?:\.\d+)?", prose):
+            if len(number.replace(",", "").replace(".", "")) >= 2:
+                assert number in generated, f"RESULTS.md, {heading}: {number} is typed, not generated"

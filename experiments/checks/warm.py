@@ -1,0 +1,58 @@
+"""Every compiled kernel into numba's on-disk cache, once, before many processes want it.
+
+`make test` runs this first (`python -m experiments.checks.warm`). On a fresh clone no
+kernel is cached: a cold `ebrl run --robot paper --steps 50` took 34 s of CPU where a warm
+one takes 4.4 s, and the test processes that start together (two pytest workers, the
+`ebrl` commands and pool workers they start) would each compile the same kernels before
+the first of them has written its cache entry. Here one short run of each robot, condition
+and learner, in both loops (the compiled stretches and dm_control's step by step), compiles
+each kernel once, on two processes; every later process loads them (ebrl/compiled.py).
+A warm cache makes this a few seconds. Nothing is written but numba's cache.
+"""
+import concurrent.futures
+import multiprocessing
+import sys
+import time
+
+STEPS = 30
+
+
+def specs():
+    """(RunSpec, fused) pairs that reach every kernel: each registered robot and shipped
+    mount in both conditions in the compiled loop; the paper robots also step by step and with the
+    other learners."""
+    from experiments.running import execution
+    from tasks.robots import MOUNTS, ROBOTS
+    out = []
+    for robot in [*ROBOTS, *MOUNTS]:
+        for condition in ("random", "avoidance"):
+            out.append((execution.RunSpec(robot, condition, 0, STEPS), True))
+    for robot in ("two_wheel", "floating"):
+        out.append((execution.RunSpec(robot, "avoidance", 0, STEPS), False))
+        for agent in ("qtable", "mfec"):
+            out.append((execution.RunSpec(robot, "avoidance", 0, STEPS, agent=agent), True))
+    return out
+
+
+def _run(batch):
+    from experiments.running import execution
+    for spec, fused in batch:
+        execution.execute(spec, fused=fused)
+    return len(batch)
+
+
+def main(workers=2):
+    start = time.perf_counter()
+    todo = specs()
+    # Alternate robots between the processes: the two drives' kernels compile side by side.
+    batches = [todo[i::workers] for i in range(workers)]
+    context = multiprocessing.get_context("spawn")
+    with concurrent.futures.ProcessPoolExecutor(workers, mp_context=context) as pool:
+        made = sum(pool.map(_run, batches))
+    print(f"warm: {made} short runs, every kernel in numba's cache "
+          f"({time.perf_counter() - start:.0f} s)", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
