@@ -159,5 +159,11 @@ def test_a_bad_input_met_in_a_worker_is_our_one_line_not_a_remote_traceback(tmp_
     assert "Traceback" not in stderr and "_RemoteTraceback" not in stderr
     assert stderr.strip().splitlines()[-1] == (
         f"ebrl: error: {room}: corridors of 2 units are narrower than the robot "
-        "(2.73 units across); set '# cell N' larger")
+        f"({2 * _two_wheel_radius():.3g} units across); set '# cell N' larger")
     assert not list(pathlib.Path(out).rglob("run.json"))
+
+
+def _two_wheel_radius():
+    """The adopted protocol's two-wheel radius (tasks.protocols), the one the run uses."""
+    from tasks.protocols import ADOPTED
+    return dict(ADOPTED.robots["two_wheel"])["radius"]

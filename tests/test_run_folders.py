@@ -12,6 +12,7 @@ import pytest
 import run_folders
 from experiments.running import results, runner, schema
 from helpers import ebrl_here
+from tasks.protocols import ADOPTED
 
 
 def _edit(folder, change):
@@ -129,7 +130,8 @@ def test_ebrl_report_skips_damaged_runs_and_counts_them(tmp_path):
 
 @pytest.mark.parametrize("args, said", [
     (["--protocol", "literal"], "(protocol: adopted on disk, literal asked; agent."),
-    (["--set", "radius=2"], "(task.radius: 1.36"),
+    (["--set", "radius=2"], "(task.radius: {} on disk, 2.0 asked)".format(
+        dict(ADOPTED.robots["two_wheel"])["radius"])),
     (["--set", "policy_threshold=0.1"], "(agent.policy_threshold: 0.3 on disk, 0.1 asked)"),
 ])
 def test_a_resume_into_other_parameters_names_them(tmp_path, args, said):
