@@ -38,6 +38,12 @@ def postgres_url(postgres_server):
 #: their time alone. Modules whose module-scoped fixture is the bulk of their cost stay
 #: on one worker, so the fixture is built once.
 _ONE_WORKER_MODULES = ("test_cli_inputs.py", "test_rendering.py")
+#: Module-scoped fixtures that make runs: the tests that use one go to one worker, so it
+#: is made once (split across the two workers, each made it: measured, `reported` cost
+#: 29 s of setup on each).
+_SHARED_FIXTURES = {"test_experiments.py": ("clean_run", "kill_clean"),
+                    "test_faults.py": ("clean", "reported"),
+                    "test_protocol7.py": ("records",), "test_provenance.py": ("made",)}
 
 
 def pytest_collection_modifyitems(config, items):
@@ -49,3 +55,5 @@ def pytest_collection_modifyitems(config, items):
             item.add_marker(pytest.mark.xdist_group("processes"))
         elif module in _ONE_WORKER_MODULES:
             item.add_marker(pytest.mark.xdist_group(module))
+        elif shared := [f for f in _SHARED_FIXTURES.get(module, ()) if f in fixtures]:
+            item.add_marker(pytest.mark.xdist_group(f"{module}:{shared[0]}"))

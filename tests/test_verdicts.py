@@ -116,3 +116,24 @@ def test_a_figure_far_from_the_paper_is_different():
     assert rows["first-trial steps"]["verdict"] == "different"
     assert not rows["first-trial steps"]["within_1_5x"]  # 0.48x
     assert tests["counts"][0]["verdict"] == "different"  # 10 of 100 against 43 of 50
+
+
+def test_welch_is_scipys_ttest_from_stats_bit_for_bit():
+    """verdicts.welch does scipy.stats.ttest_ind_from_stats' arithmetic itself (its
+    import was most of a report's start): the same t and p, to the last bit, on the
+    shapes of our summaries (means and sds of steps, 2-120 runs) and every alternative."""
+    import numpy as np
+    rng = np.random.default_rng(48)
+    for _ in range(3000):
+        m1, m2 = rng.uniform(50, 20_000, 2)
+        s1, s2 = rng.uniform(5, 15_000, 2)
+        n1, n2 = (int(n) for n in rng.integers(2, 121, 2))
+        for alternative in ("two-sided", "greater", "less"):
+            ours = verdicts.welch(m1, s1, n1, m2, s2, n2, alternative)
+            theirs = stats.ttest_ind_from_stats(m1, s1, n1, m2, s2, n2, equal_var=False,
+                                                alternative=alternative)
+            assert (ours["t"], ours["p"]) == (float(theirs.statistic), float(theirs.pvalue))
+    z = stats.norm.ppf(0.95)
+    assert verdicts.power(100, 50, 100, 50) == float(
+        stats.norm.cdf((1 / 3) * 100 / (50 * math.sqrt(1 / 100 + (2 / 3) ** 2 / 50)) - z)
+        * stats.norm.cdf(0.5 * 100 / (50 * math.sqrt(1 / 100 + 1.5 ** 2 / 50)) - z))

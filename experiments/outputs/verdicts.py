@@ -3,7 +3,7 @@
 For each of the eight figures the paper gives with a mean, an sd and a number of runs (the
 first trial and the steps per trial, both robots, both conditions), two tests of our runs
 against the paper's, both Welch's (unequal variances), both by scipy from the two samples'
-summaries (`scipy.stats.ttest_ind_from_stats`):
+summaries (`scipy.stats.ttest_ind_from_stats`'s arithmetic, bit for bit: `welch`):
 
 - **difference** (`welch`): two-sided, H0 that our mean is the paper's;
 - **equivalence** (`tost`): two one-sided tests of H0 that our mean lies outside
@@ -22,7 +22,8 @@ a column, for continuity with the earlier protocols' tables; it is not a verdict
 """
 import math
 
-from scipy import stats
+import numpy as np
+from scipy import special
 
 from experiments import paper
 
@@ -42,11 +43,27 @@ def welch_df(s1, n1, s2, n2):
 
 def welch(m1, s1, n1, m2, s2, n2, alternative="two-sided"):
     """Welch's t test of sample 1 against sample 2 from their means, sds (ddof 1) and
-    sizes: {"t", "df", "p"} (scipy.stats.ttest_ind_from_stats, equal_var=False)."""
-    r = stats.ttest_ind_from_stats(m1, s1, n1, m2, s2, n2, equal_var=False,
-                                   alternative=alternative)
-    return {"t": float(r.statistic), "df": float(welch_df(s1, n1, s2, n2)),
-            "p": float(r.pvalue)}
+    sizes: {"t", "df", "p"}.
+
+    scipy.stats.ttest_ind_from_stats(..., equal_var=False) step for step (its variances
+    per size, its Welch-Satterthwaite df, the t distribution's tail by special.stdtr, on
+    0-d arrays as it computes them: the same bits, tests/test_verdicts.py), written here
+    because importing scipy.stats was the largest part of every report's start (0.7 s of
+    CPU; scipy.special alone 0.2 s), paid by each `ebrl` command that builds a report."""
+    m1, s1, m2, s2 = (np.asarray(v, dtype=np.float64) for v in (m1, s1, m2, s2))
+    vn1, vn2 = s1 ** 2 / n1, s2 ** 2 / n2
+    df = (vn1 + vn2) ** 2 / (vn1 ** 2 / (n1 - 1) + vn2 ** 2 / (n2 - 1))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.divide(m1 - m2, np.sqrt(vn1 + vn2))
+    if alternative == "two-sided":
+        p = 2 * special.stdtr(df, -np.abs(t))
+    elif alternative == "greater":
+        p = special.stdtr(df, -t)
+    elif alternative == "less":
+        p = special.stdtr(df, t)
+    else:
+        raise ValueError(f"alternative must be two-sided, greater or less, not {alternative!r}")
+    return {"t": float(t), "df": float(welch_df(float(s1), n1, float(s2), n2)), "p": float(p)}
 
 
 def tost(m1, s1, n1, m2, s2, n2, low=LOW, high=HIGH):
@@ -63,15 +80,17 @@ def power(m, s, n_ours, n_paper, low=LOW, high=HIGH, alpha=ALPHA):
     paper's (the same mean m and sd s), n_ours of ours against the paper's n_paper: the
     chance that both one-sided tests reject at alpha, treating them as independent (their
     statistics are negatively correlated, so this is a lower bound's neighbour, a guide)."""
-    z = stats.norm.ppf(1 - alpha)
+    z = special.ndtri(1 - alpha)  # scipy.stats.norm.ppf
     lo = (1 - low) * m / (s * math.sqrt(1 / n_ours + low * low / n_paper))
     hi = (high - 1) * m / (s * math.sqrt(1 / n_ours + high * high / n_paper))
-    return float(stats.norm.cdf(lo - z) * stats.norm.cdf(hi - z))
+    return float(special.ndtr(lo - z) * special.ndtr(hi - z))  # norm.cdf
 
 
 def fisher(k1, n1, k2, n2):
     """Fisher's exact test (two-sided) of k1 of n1 against k2 of n2: {"p", "odds_ratio"}
-    (scipy.stats.fisher_exact on [[k1, n1 - k1], [k2, n2 - k2]])."""
+    (scipy.stats.fisher_exact on [[k1, n1 - k1], [k2, n2 - k2]]; imported here, as only
+    reports of two-wheel runs at the paper's budget test counts)."""
+    from scipy import stats
     r = stats.fisher_exact([[k1, n1 - k1], [k2, n2 - k2]], alternative="two-sided")
     return {"p": float(r.pvalue), "odds_ratio": float(r.statistic)}
 
