@@ -6,6 +6,7 @@ import importlib.util
 import pathlib
 
 from tasks.mount.fields import Fields, MountError, read
+from tasks.mount.frame import FORWARDS
 from tasks.mount.kinds import KINDS
 from tasks.mount.records import Action, Beams, Bumper, Mount
 from tasks.mount.spec import BEAMS
@@ -27,7 +28,7 @@ ACTIONS = {drive: tuple(name for name, kind in KINDS.items() if drive in kind.dr
 
 _TOP = {"name", "description", "file", "drive", "unit", "base", "joints", "drop",
         "drop_geoms", "drop_bodies", "keep_options", "timestep", "integrator", "time_scale",
-        "condim",
+        "condim", "forward", "rest",
         "bumper", "beams", "action", "readings", "check"}
 _BUMPER = {"geom", "shape", "radius", "height", "half_length"}
 _BEAMS = {"height", "sensors"}
@@ -76,6 +77,7 @@ def parse(path: str | pathlib.Path) -> Mount:
                  timestep=number(data, "timestep", "timestep"), integrator=integrator,
                  time_scale=number(data, "time_scale", "time_scale", 1.0),
                  condim=_parse_condim(fields, data, joints),
+                 forward=_parse_forward(fields, data, drive), rest=_parse_rest(fields, data),
                  readings=readings, check=check,
                  description=str(data.get("description", "")))
 
@@ -198,3 +200,32 @@ def _parse_condim(fields, data, joints):
         fields.fail("condim", f"joints = {joints}: its geoms touch nothing (condim is for "
                               "a robot that stands on the floor)")
     return int(v)
+
+
+def _parse_forward(fields, data, drive):
+    """The forward field: the base's axis the robot moves along (FORWARDS; default x)."""
+    v = data.get("forward", "x")
+    if v not in FORWARDS:
+        fields.fail("forward", f"must be one of {', '.join(FORWARDS)}, got {v!r}")
+    if v != "x" and drive != "two_wheel":
+        fields.fail("forward", f"the {drive} drive has no forward axis (its beams and "
+                               "thrusts follow the room's axes)")
+    return v
+
+
+def _parse_rest(fields, data):
+    """The rest field: a keyframe's name of the file, or a table of joint = value (rad
+    for a hinge, m for a slide); None: the file's qpos0 (tasks.mount.frame.rest_values
+    checks it against the file)."""
+    if "rest" not in data:
+        return None
+    v = data["rest"]
+    if isinstance(v, str):
+        if not v:
+            fields.fail("rest", "must be a keyframe's name or a table of joint = value")
+        return v
+    if not isinstance(v, dict) or not v:
+        fields.fail("rest", "must be a keyframe's name or a table of joint = value")
+    for name in v:
+        fields.number(v, name, f"rest.{name}", positive=False)
+    return tuple(sorted((name, float(value)) for name, value in v.items()))
