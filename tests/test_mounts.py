@@ -354,7 +354,7 @@ def test_an_installed_copy_finds_the_shipped_mounts_and_behaviours_by_name(tmp_p
                     str(target), str(source)], check=True, capture_output=True)
     code = ("import tasks, ebrl.behaviour as b\n"
             "assert tasks.__file__.startswith(%r)\n"
-            "assert sorted(tasks.MOUNTS) == ['ant', 'car', 'point', 'point_mass', 'quadruped']\n"
+            "assert sorted(tasks.MOUNTS) == ['ant', 'car', 'gym_ant', 'point', 'point_mass', 'quadruped']\n"
             "assert tasks.resolve('car').model.is_relative_to(%r)\n"
             "env = tasks.load('car'); env.reset(); env.step([0.0]); env.close()\n"
             "print(b.load('paper_eq8').behaviour, b.load('behaviours/paper_eq9-10.json').behaviour)\n"

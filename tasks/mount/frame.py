@@ -9,8 +9,9 @@ What the mount adds follows from them (tasks.mount.spec): root slides along the 
 x and y whatever the base's rotation, the beams and the bumper in the robot's frame, and
 a site FRAME_SITE on the base with the robot's frame where it is not the base's own (a
 base tilted in its file, a forward axis other than x), from which tasks.navigation reads
-the pose. The rest is recorded in the model's text element models.REST_TEXT and set as
-the model's qpos0 when it is compiled in the room (models.apply_rest)."""
+the pose. The rest is recorded in the model's text element models.REST_TEXT, which
+models.rest_qpos reads (the model's qpos0 stays the file's: it is the joints' reference,
+where the file's bodies stand)."""
 from __future__ import annotations
 
 import dataclasses

@@ -54,7 +54,7 @@ def _robot_frame(mount, spec, base, frame):
 
 def _rest(mount, spec):
     """The rest pose (tasks.mount.frame.rest_values) of the joints the robot keeps, in the
-    model's text element models.REST_TEXT (models.apply_rest sets it as qpos0)."""
+    model's text element models.REST_TEXT (models.rest_qpos reads it)."""
     import models
     kept = []
     for name, value in frames.rest_values(mount):
