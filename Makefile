@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 DEMO_OUT ?= demo_results
 
-.PHONY: demo lint test bench clean lock
+.PHONY: demo lint test test-fast bench clean lock
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -54,10 +54,16 @@ demo: $(VENV)/.installed
 lint: $(VENV)/.installed-test
 	$(BIN)/ruff check .
 
-# Two workers (tests/conftest.py keeps the tests that start Ray or PostgreSQL on one);
-# the 15 slowest tests listed at the end (make test stays under 10 minutes on 2 cores).
+# The tests in two tiers (pyproject.toml's `slow` marker). make test runs every test on two
+# workers (tests/conftest.py keeps the tests that start Ray or PostgreSQL on one), the 15
+# slowest listed at the end; make test-fast, the edit loop, runs the unit tier: the
+# equations, kernels, parsers and command-line refusals in process, no test that starts
+# processes, renders a video, runs a study or checks a golden run.
 test: lint $(VENV)/.installed-test
 	$(BIN)/python -m pytest -q -n 2 --dist loadgroup --durations=15
+
+test-fast: lint $(VENV)/.installed-test
+	$(BIN)/python -m pytest -q -n 2 -m "not slow" --durations=5
 
 bench: $(VENV)/.installed
 	$(BIN)/ebrl bench

@@ -390,23 +390,33 @@ class Navigation(control.Task):
 
     def action_array(self, action):
         """The action as a fresh float64 array of shape (action_dim,) (a scalar for a
-        one-part action); ValueError for another shape, NaN or inf. Clipping to [-1, 1]
-        is the step's (tasks.kernels.body.clip_unit)."""
+        one-part action), clipped to [-1, 1] (tasks.kernels.body.clip_unit, which the
+        step runs again); ValueError for another shape, NaN or inf, before any draw."""
         a = np.array(action, dtype=np.float64)
         if a.shape != (self.action_dim,):
             if not (a.ndim == 0 and self.action_dim == 1):
                 raise ValueError(f"action must have shape ({self.action_dim},), got {a.shape}")
             a = a.reshape(1)
-        if not np.all(np.isfinite(a)):
-            raise ValueError(f"action must be finite, got {a.tolist()}")
+        if not body.clip_unit(a):
+            raise ValueError(f"action must be finite, got {a.tolist()}")  # nothing clipped
         return a
 
+    def act(self, action, physics):
+        """The agent step (tasks.kernels.steps.step) on the checked action: the goal kept
+        for get_reward and get_termination; returns its observation."""
+        a = self.action_array(action)
+        u, z, vz = self.draws()
+        codes, velocity = self._sensed
+        status, n, goal = steps.step(physics.record, a, u, z, vz, codes, velocity)
+        self.finish(n, goal, physics, status)
+        return self._observation()
+
     def compiled_step(self, action, physics):
-        """An agent step (tasks.kernels.steps.step) without dm_control's hooks around it:
-        returns (reward, observation, termination)."""
-        self.before_step(action, physics)
-        return self.get_reward(physics), self.get_observation(physics), \
-            self.get_termination(physics)
+        """An agent step (`act`) without dm_control's hooks around it: returns (reward,
+        observation, termination)."""
+        observation = self.act(action, physics)
+        goal = self._at_goal
+        return (1.0 if goal else 0.0), observation, (0.0 if goal else None)
 
     def finish(self, substeps, goal, physics, status=bindings.OK):
         """The end of compiled steps (this task's or a compiled loop's): the substeps
@@ -439,15 +449,9 @@ class Navigation(control.Task):
         physics.set_robot_pose(x, y, heading)
 
     def before_step(self, action, physics):
-        """The whole agent step (tasks.kernels.steps.step) on the checked action: its
-        goal kept for get_reward and get_termination, its observation for
-        get_observation."""
-        a = self.action_array(action)
-        u, z, vz = self.draws()
-        codes, velocity = self._sensed
-        status, n, goal = steps.step(physics.record, a, u, z, vz, codes, velocity)
-        self.finish(n, goal, physics, status)
-        self._pending = self._observation()
+        """The whole agent step (`act`): its goal kept for get_reward and
+        get_termination, its observation for get_observation."""
+        self._pending = self.act(action, physics)
 
     def get_observation(self, physics):
         """The last step's observation; without one (an episode's first, or dm_control's

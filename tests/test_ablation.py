@@ -1,7 +1,12 @@
 """`ebrl ablate` and the task settings through the real command line."""
 import json
 
+import pytest
+
 from helpers import ebrl, ebrl_here
+
+#: The slow tier (pyproject.toml's markers): real `ebrl ablate` and `ebrl run` processes.
+pytestmark = pytest.mark.slow
 
 
 def test_a_task_setting_is_recorded_and_changes_the_run(tmp_path):

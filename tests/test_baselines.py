@@ -447,6 +447,7 @@ def test_bad_inputs_raise(name):
         ag.learn(float("inf"))
 
 
+@pytest.mark.slow
 def test_baselines_import_nothing_heavy():
     import subprocess
     import sys

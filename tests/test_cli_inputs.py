@@ -1,15 +1,13 @@
-"""Bad command lines, as a new user would type them, through the real command in real
-processes: each one fails fast, in one line, without a traceback and writing nothing.
+"""Bad command lines, as a new user would type them, through the real command: each one
+fails fast, in one line, without a traceback and writing nothing.
 
-Every case runs in its own sandbox folder (the process's cwd), holding a regular file,
+Every case runs in its own sandbox folder (the command's cwd), holding a regular file,
 an empty folder and a folder named like a video; the sandbox must be unchanged after.
-Each case is its own process, forked from an interpreter that imported the command once
-(tests/data/forked_cli.py: a fresh `python -m experiments` spends about a second on its
-imports, 100 cases 100 s); a few cases also run as a fresh `python -m experiments`, the
-whole way a user starts it.
+Each case runs the command's main() in this process (tests/helpers.py's ebrl_here: the
+same parser, checks, line and exit status, without a fresh interpreter's second of
+imports per case: the unit tier); a few cases also run as a fresh `python -m
+experiments`, the whole way a user starts it (the slow tier).
 """
-import concurrent.futures
-import json
 import os
 import pathlib
 import subprocess
@@ -17,6 +15,8 @@ import sys
 import time
 
 import pytest
+
+from helpers import ebrl_here
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 LIMIT_S = 10.0
@@ -192,19 +192,12 @@ def _run(args, cwd):
     return proc, time.perf_counter() - started, before, _snapshot(cwd)
 
 
-def _run_forked(cases, scratch):
-    """Cases [(args, sandbox), ...] as processes forked by one tests/data/forked_cli.py:
-    [(process, seconds, before, after), ...], a process as subprocess.run gives it."""
-    scratch.mkdir()
-    befores = [_snapshot(cwd) for _, cwd in cases]
-    (scratch / "cases.json").write_text(json.dumps([[str(cwd), args] for args, cwd in cases]))
-    driver = ROOT / "tests" / "data" / "forked_cli.py"
-    subprocess.run([sys.executable, str(driver), str(scratch / "cases.json"),
-                    str(scratch / "out.json")], cwd=scratch, env=_env(), check=True, timeout=600)
-    out = json.loads((scratch / "out.json").read_text())
-    return [(subprocess.CompletedProcess(args, status, stdout, stderr), seconds, before,
-             _snapshot(cwd))
-            for (args, cwd), (status, stdout, stderr, seconds), before in zip(cases, out, befores)]
+def _run_here(args, cwd):
+    """One case in this process (ebrl_here): (process, seconds, before, after)."""
+    before = _snapshot(cwd)
+    started = time.perf_counter()
+    proc = ebrl_here(*args, cwd=cwd)
+    return proc, time.perf_counter() - started, before, _snapshot(cwd)
 
 
 #: Cases that also run as a fresh `python -m experiments` (one per kind of failure: the
@@ -214,16 +207,9 @@ FRESH = (0, 7, 39)
 
 @pytest.fixture(scope="module")
 def outcomes(tmp_path_factory):
-    """Every case's (process, seconds, sandbox before, sandbox after), forked in two
-    halves side by side."""
+    """Every case's (process, seconds, sandbox before, sandbox after), in this process."""
     base = tmp_path_factory.mktemp("bad_inputs")
-    cases = [(args, _sandbox(base / f"case_{i:03d}")) for i, (args, _) in enumerate(CASES)]
-    halves = (cases[0::2], cases[1::2])
-    with concurrent.futures.ThreadPoolExecutor(2) as pool:
-        done = list(pool.map(_run_forked, halves, (base / "forks_0", base / "forks_1")))
-    out = [None] * len(cases)
-    out[0::2], out[1::2] = done
-    return out
+    return [_run_here(args, _sandbox(base / f"case_{i:03d}")) for i, (args, _) in enumerate(CASES)]
 
 
 @pytest.fixture(scope="module")
@@ -258,9 +244,10 @@ def test_a_bad_input_fails_fast_in_one_line_writing_nothing(outcomes, index):
     _check(index, *outcomes[index])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("index", FRESH, ids=[" ".join(CASES[i][0]) for i in FRESH])
 def test_a_bad_input_to_a_fresh_command_is_the_same_line(outcomes, fresh_outcomes, index):
-    """The whole way a user starts it (`python -m experiments`): the same one line as the
-    forked process's."""
+    """The whole way a user starts it (`python -m experiments`): the same one line as in
+    process."""
     _check(index, *fresh_outcomes[index])
     assert fresh_outcomes[index][0].stderr == outcomes[index][0].stderr

@@ -10,7 +10,12 @@ import subprocess
 import sys
 import time
 
+import pytest
+
 from helpers import ROOT, ebrl
+
+#: The slow tier (pyproject.toml's markers): PostgreSQL, Ray and study workers in processes.
+pytestmark = pytest.mark.slow
 
 FIT = ["fit", "--trials", "6", "--batch", "2", "--seeds", "0", "--promote-seeds", "0",
        "--space", "policy_threshold", "--steps", "200", "--workers", "1", "--no-progress"]

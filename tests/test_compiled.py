@@ -7,6 +7,11 @@ import subprocess
 import sys
 import textwrap
 
+import pytest
+
+#: The slow tier (pyproject.toml's markers): fresh processes compiling and loading numba's cache.
+pytestmark = pytest.mark.slow
+
 CALLEE = "from numba import njit\n\nSCALE = {scale}\n\n\n@njit(cache=True)\ndef f(x):\n    return SCALE * x\n"
 CALLER = textwrap.dedent("""\
     {install}

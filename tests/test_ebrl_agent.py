@@ -114,6 +114,7 @@ def test_same_seed_same_state_bit_for_bit():
     assert ag1.memory_decisions == ag2.memory_decisions > 0
 
 
+@pytest.mark.slow
 def test_kernels_are_compiled_once_and_cached():
     """Every kernel carries cache=True, and a new process loads them from numba's cache
     instead of compiling: the second of two fresh processes compiles nothing."""

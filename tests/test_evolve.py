@@ -161,6 +161,7 @@ def test_the_paper_files_reproduce_the_default_runs_bit_for_bit(robot):
         assert dropped["trace"].tobytes() != default["trace"].tobytes()
 
 
+@pytest.mark.slow
 def test_run_with_a_behaviour_file_records_it_and_matches_the_default(tmp_path):
     common = ["run", "--robot", "two_wheel", "--condition", "avoidance", "--seeds", "0",
               "--steps", 600, "--workers", 1, "--no-progress"]
@@ -203,6 +204,7 @@ def _bad(tmp_path, change=None, drop=None, text=None, behaviour="eq8"):
     ("set", "--set random_sd conflicts with --behaviour"),
     ("nofile", "No such file"),
 ])
+@pytest.mark.slow
 def test_bad_genomes_are_one_line_and_write_nothing(tmp_path, capsys, kind, message):
     extra = []
     path = {
@@ -259,6 +261,7 @@ def _record(out):
     return [(t.number, t.state.name, t.params, t.value) for t in _study(out).trials]
 
 
+@pytest.mark.slow
 def test_a_tiny_evolution_runs_resumes_and_is_deterministic(tmp_path, capsys):
     a, b, c = tmp_path / "a", tmp_path / "b", tmp_path / "c"
     proc = ebrl(*EVOLVE, "--generations", 1, "--out", a)
@@ -307,6 +310,7 @@ def test_a_tiny_evolution_runs_resumes_and_is_deterministic(tmp_path, capsys):
     assert sum(t.state.name == "COMPLETE" for t in trials) == 9
 
 
+@pytest.mark.slow
 def test_evolution_without_learning_never_lets_the_memory_act(tmp_path):
     out = tmp_path / "c"
     proc = ebrl("evolve", "--robot", "two_wheel", "--population", 2, "--generations", 1,
@@ -331,6 +335,7 @@ def test_evolution_without_learning_never_lets_the_memory_act(tmp_path):
     (["--storage", "not a url://"], "bad --storage"),
     (["--seeds", "5-3"], "reversed seed range"),
 ])
+@pytest.mark.slow
 def test_bad_evolve_arguments_are_one_line_and_write_nothing(tmp_path, capsys, args, message):
     out = tmp_path / "ev"
     base = ["evolve", "--robot", "two_wheel"] if "--robot" not in args else ["evolve"]
@@ -354,6 +359,7 @@ def test_study_keys_runs_by_genome_and_keeps_fits_keys():
                                                          "first_trial_steps": 12}}})[0])
 
 
+@pytest.mark.slow
 def test_evolve_report_sets_the_evolved_learner_beside_the_papers_rule(tmp_path):
     """A tiny evolution, the paper's rule and the evolved genome on three held-out seeds:
     EVOLVE.md's ratio is the hand-coded mean steps per trial over the evolved one, computed

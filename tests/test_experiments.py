@@ -46,6 +46,7 @@ def clean_run(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 def test_claim_odds_draws_seeds_and_judges_each_draw_as_the_report(tmp_path):
     """examples/claim_odds.py, run as a user would: a draw of every seed is the report's
     own verdicts (each share 0 or 1, the same as report.claims on the whole folder); more
@@ -73,6 +74,7 @@ def test_claim_odds_draws_seeds_and_judges_each_draw_as_the_report(tmp_path):
     assert bad.returncode == 1 and "only 2 seeds" in bad.stderr
 
 
+@pytest.mark.slow
 def test_a_short_run_writes_every_file(clean_run):
     runs = sorted(clean_run.glob("*/*/seed_*"))
     assert len(runs) == 8
@@ -103,6 +105,7 @@ def test_a_short_run_writes_every_file(clean_run):
     assert "first-trial steps" in report and "6,087" in report
 
 
+@pytest.mark.slow
 def test_rerun_skips_and_report_is_reproducible(clean_run):
     before = (clean_run / "summary.json").read_bytes()
     proc = ebrl("run", *SMALL, "--out", clean_run)
@@ -111,12 +114,14 @@ def test_rerun_skips_and_report_is_reproducible(clean_run):
     assert (clean_run / "summary.json").read_bytes() == before
 
 
+@pytest.mark.slow
 def test_worker_count_does_not_change_results(clean_run, tmp_path):
     ebrl("run", *SMALL, "--workers", "2", "--out", tmp_path / "w2")
     assert arrays(tmp_path / "w2") == arrays(clean_run)
     assert summary(tmp_path / "w2") == summary(clean_run)
 
 
+@pytest.mark.slow
 def test_ray_backend_gives_the_same_results(clean_run, tmp_path):
     pytest.importorskip("ray")
     env = dict(os.environ)
@@ -186,6 +191,7 @@ def alive(pid):
     ("running", 2),    # with the spawn pool's workers busy
     ("reporting", 2),  # every run on disk, the report being built
 ])
+@pytest.mark.slow
 def test_kill_then_resume_gives_the_clean_summary(kill_clean, tmp_path, moment, workers):
     args = [*KILL_ARGS, "--workers", workers, "--out", tmp_path / "killed"]
     out = tmp_path / "killed"
@@ -210,6 +216,7 @@ def test_kill_then_resume_gives_the_clean_summary(kill_clean, tmp_path, moment, 
     assert arrays(out) == arrays(kill_clean)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("how", ["ctrl-c", "sigterm"])
 def test_ctrl_c_stops_the_workers_in_one_line_and_the_command_resumes(kill_clean, tmp_path, how):
     """Ctrl-C at a terminal (SIGINT to the whole group), or SIGTERM to the command alone
@@ -243,6 +250,7 @@ def test_ctrl_c_stops_the_workers_in_one_line_and_the_command_resumes(kill_clean
     assert arrays(out) == arrays(kill_clean)
 
 
+@pytest.mark.slow
 def test_a_failed_run_is_recorded_named_never_averaged_and_retried(clean_run, tmp_path):
     out = tmp_path / "results"
     failing = "two_wheel/avoidance/seed_001"
@@ -282,6 +290,7 @@ def test_a_failed_run_is_recorded_named_never_averaged_and_retried(clean_run, tm
     assert "Failed runs" not in (out / "REPORT.md").read_text()
 
 
+@pytest.mark.slow
 def test_a_worker_that_dies_fails_only_its_own_run(clean_run, tmp_path):
     out = tmp_path / "results"
     dying = "two_wheel/random/seed_000"
@@ -310,6 +319,7 @@ def test_a_worker_that_dies_fails_only_its_own_run(clean_run, tmp_path):
     (["render", "--robot", "two_wheel", "--condition", "avoidance", "--seed", "0",
       "--out", "x.gif"], "mp4"),
 ])
+@pytest.mark.slow
 def test_bad_arguments_fail_in_one_line_and_write_nothing(tmp_path, args, message):
     if args[0] == "run":
         args = args + ["--out", str(tmp_path / "out")]
@@ -321,6 +331,7 @@ def test_bad_arguments_fail_in_one_line_and_write_nothing(tmp_path, args, messag
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_a_corrupted_run_is_named_never_averaged(clean_run, tmp_path):
     import shutil
     out = tmp_path / "results"
@@ -336,6 +347,7 @@ def test_a_corrupted_run_is_named_never_averaged(clean_run, tmp_path):
     assert (out / "summary.json").read_bytes() == before  # nothing overwritten
 
 
+@pytest.mark.slow
 def test_other_parameters_are_refused_not_overwritten(clean_run, tmp_path):
     import shutil
     out = tmp_path / "results"
@@ -345,6 +357,7 @@ def test_other_parameters_are_refused_not_overwritten(clean_run, tmp_path):
     assert json.loads((out / "two_wheel/random/seed_000/run.json").read_text())["parameters"]["steps"] == 400
 
 
+@pytest.mark.slow
 def test_sweep_table_takes_the_default_rows_from_a_baseline_run(clean_run, tmp_path):
     sweep = ["sweep", "--robot", "two_wheel", "--condition", "avoidance", "--values", "0.4",
              "--steps", "400", "--out", tmp_path / "sweeps", "--baseline", clean_run, "--no-progress"]
@@ -367,6 +380,7 @@ def test_sweep_table_takes_the_default_rows_from_a_baseline_run(clean_run, tmp_p
 
 @pytest.mark.parametrize("robot,camera", [("floating", "top"), ("diff_drive", "follow"),
                                           ("hovercraft", "chase")])
+@pytest.mark.slow
 def test_rendered_video_has_moving_frames(tmp_path, robot, camera):
     import imageio.v3 as iio
     video = tmp_path / "run.mp4"
@@ -397,6 +411,7 @@ env.close()
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("backend,library", [("egl", "EGL"), ("osmesa", "OSMesa")])
 def test_offscreen_frame_renders_with_no_error_at_exit(backend, library):
     if not ctypes.util.find_library(library):
@@ -427,6 +442,7 @@ def test_intrinsic_parameters_reach_the_fallback():
         env.close()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("agent", ["qtable", "mfec"])
 def test_run_with_another_learner(tmp_path, agent):
     out = tmp_path / "results"

@@ -18,6 +18,9 @@ import helpers
 from experiments.running import results, runner
 from helpers import ROOT
 
+#: The slow tier (pyproject.toml's markers): processes killed, crashed, starved of disk.
+pytestmark = pytest.mark.slow
+
 SET = ["--robot", "two_wheel", "--condition", "all", "--seeds", "0-3", "--steps", "1000",
        "--no-progress"]
 

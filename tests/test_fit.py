@@ -169,6 +169,9 @@ def test_bad_fit_arguments_are_one_line_and_write_nothing(tmp_path, args, messag
 # -- stage 1: the first trials (experiments.studies.first_trials) ----------------------
 from experiments.studies import first_trials  # noqa: E402
 
+#: The slow tier (pyproject.toml's markers): real `ebrl fit` studies.
+pytestmark = pytest.mark.slow
+
 
 def test_the_first_trial_distance_by_hand_on_made_up_samples():
     """Two-wheel, paper: random 6,087 +- 5,789 (49 of 50 at the goal), avoidance 956 +- 954

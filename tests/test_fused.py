@@ -41,6 +41,7 @@ def _state(env, agent):
     for condition in ("avoidance", "random")] + [
     # the mounts' own drives: the car's motors, the Ant's gait, the point mass's thrusters
     ("car", 400, "avoidance"), ("ant", 30, "random"), ("point_mass", 600, "avoidance")])
+@pytest.mark.slow
 def test_a_stretch_is_the_step_by_step_loop(robot, steps, condition):
     """execution.Trials step by step (Agent.act, Environment.step, Agent.learn) against
     the compiled stretches over the same functions, in stretches of at most 700 steps
@@ -65,6 +66,7 @@ def test_a_stretch_is_the_step_by_step_loop(robot, steps, condition):
     env1.close(), env2.close()
 
 
+@pytest.mark.slow
 def test_runs_are_the_same_fused_or_not_and_reach_the_goal():
     for robot, condition, seed, steps in (("two_wheel", "avoidance", 1, 12_000),
                                           ("floating", "random", 300, 8000)):

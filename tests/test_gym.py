@@ -106,6 +106,7 @@ def test_spaces_are_float32_and_bounded_where_a_bound_exists(env_id):
     env.close()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("env_id", IDS)
 def test_async_vector_env_with_spawned_workers(env_id):
     """Workers started with spawn (as SB3's SubprocVecEnv does) import nothing of ours
@@ -146,6 +147,7 @@ env.close()
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("backend", [None, "egl"])
 def test_a_process_that_does_not_render_loads_no_opengl_library(backend):
     """Not even with MUJOCO_GL=egl set; the first frame loads it."""

@@ -356,6 +356,7 @@ def test_joint_motors_refuse_joints_no_actuator_moves_and_mixed_kinds(tmp_path):
         tasks.load(str(path)).close()
 
 
+@pytest.mark.slow
 def test_joint_motors_and_the_quadrupeds_gait_run_the_same_fused_or_not(tmp_path):
     """The protocol's compiled stretches (experiments.running.fused) run the joint motors'
     realisation and the quadruped's servo gait as the step-by-step loop does."""

@@ -36,6 +36,7 @@ def _pair(robot, **fields):
     ("point", {}),
     ("point_mass", {}),
 ])
+@pytest.mark.slow
 def test_the_compiled_step_is_the_hooks_step_for_step(robot, fields):
     compiled, hooks = _pair(robot, **fields)
     assert compiled.steps_compiled and not hooks.steps_compiled

@@ -11,6 +11,9 @@ from ebrl.agent import DECIDERS
 from experiments.outputs import rendering, report
 from experiments.running import results
 
+#: The slow tier (pyproject.toml's markers): frames rendered and runs made.
+pytestmark = pytest.mark.slow
+
 H, W = rendering.HEIGHT, rendering.WIDTH
 
 #: Two corridors in a 9 x 13 room, the start at the top left, the goal at the bottom right,

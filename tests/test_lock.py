@@ -72,6 +72,7 @@ def test_the_installed_packages_are_the_locks():
     assert lock.differences(TEST) == []
 
 
+@pytest.mark.slow
 def test_a_run_and_its_report_name_the_lock(tmp_path):
     out = tmp_path / "results"
     helpers.ebrl("run", "--robot", "two_wheel", "--condition", "avoidance", "--seeds", "0",

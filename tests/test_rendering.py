@@ -14,6 +14,9 @@ from experiments.running import execution
 from experiments.outputs import rendering
 from models import UNIT
 
+#: The slow tier (pyproject.toml's markers): videos rendered.
+pytestmark = pytest.mark.slow
+
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 H, W = rendering.HEIGHT, rendering.WIDTH
 

@@ -18,6 +18,7 @@ from tasks.protocols import PROTOCOL_VERSION
 MODELS = ROOT / "models"
 
 
+@pytest.mark.slow
 def test_every_command_takes_its_robots_from_the_registry():
     listed = ebrl("robots")
     assert listed.returncode == 0
@@ -78,6 +79,7 @@ def test_sensors_once_per_step_read_as_sensors_every_substep():
         once.close(), every.close()
 
 
+@pytest.mark.slow
 def test_planar_trajectories_unchanged_by_the_registry():
     """The first 3,000 steps of seeds 0-1, every paper robot and condition, as the full
     run behind RESULTS.md made them (tests/data/planar_traces_v<PROTOCOL_VERSION>.npz,
@@ -105,6 +107,7 @@ def _copy_robot(tmp_path, name, edit=None):
     return path
 
 
+@pytest.mark.slow
 def test_a_robot_file_outside_the_package_loads_and_runs(tmp_path):
     path = _copy_robot(tmp_path, "two_wheel")
     # the registered robot's body reading (its radius) is its entry's, not its file's
@@ -138,6 +141,7 @@ def test_a_robot_file_outside_the_package_loads_and_runs(tmp_path):
     ("floating", "floating", lambda t: re.sub(r'<rangefinder name="range_7"[^>]*>', "", t),
      "needs 8 rangefinders"),
 ])
+@pytest.mark.slow
 def test_a_missing_part_is_one_line_naming_it(tmp_path, robot, drive, edit, missing):
     path = _copy_robot(tmp_path, robot, edit)
     with pytest.raises(navigation.ContractError, match=re.escape(missing)):
@@ -154,6 +158,7 @@ def test_a_missing_part_is_one_line_naming_it(tmp_path, robot, drive, edit, miss
     (["--robot", "no/such/robot.xml", "--drive", "two_wheel"], "no robot file"),
     (["--robot", "two_wheel", "--drive", "floating"], "has the two_wheel drive"),
 ])
+@pytest.mark.slow
 def test_robot_file_arguments_are_checked(tmp_path, args, message):
     proc = ebrl_here("run", *args, "--out", tmp_path / "out", cwd=ROOT)
     assert proc.returncode == 2 and message in proc.stderr and not (tmp_path / "out").exists()
@@ -166,6 +171,7 @@ def test_3d_robot_free_space_actions_within_five_percent(robot):
         assert e.max() <= limits[key], (key, e.max())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("robot", ["diff_drive", "hovercraft"])
 def test_3d_robot_random_action_fuzz(robot):
     """The fuzz of `ebrl check` with 1,500 actions (all 100,000: `ebrl check`)."""

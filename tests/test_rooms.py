@@ -69,6 +69,7 @@ def test_a_bad_map_is_one_line_naming_its_file(text, words):
     assert "\n" not in str(e.value)
 
 
+@pytest.mark.slow
 def test_bad_maps_on_the_command_line(tmp_path):
     """Exit 2 and one line naming the file, before any work: a bad character (at
     parsing), and a corridor narrower than the robot (composing the robot in)."""
@@ -97,6 +98,7 @@ def test_random_mazes_are_reachable_and_drawn_by_their_seed(size):
     assert rooms.load("random:21x21:0").rows != rooms.load("random:21x21:1").rows
 
 
+@pytest.mark.slow
 def test_a_room_is_part_of_a_runs_record_and_folder(tmp_path):
     spec = execution.RunSpec("two_wheel", "avoidance", 0, 60, room="u_maze")
     paper = execution.RunSpec("two_wheel", "avoidance", 0, 60, room="sutton")
@@ -167,6 +169,7 @@ def test_the_optimal_path_follows_the_map():
     assert best["path"][:, 0].max() > 20.0  # it goes round the bar's east end
 
 
+@pytest.mark.slow
 def test_rooms_lists_the_shipped_maps():
     proc = ebrl("rooms", check=True)
     for name in rooms.MAPS:
@@ -174,6 +177,7 @@ def test_rooms_lists_the_shipped_maps():
     assert "random:WxH:SEED" in proc.stdout
 
 
+@pytest.mark.slow
 def test_the_maze_study_runs_its_budget_rule_and_writes_its_table(tmp_path):
     """A tiny maze study: the budget is the rule's, every (maze, seed) unit of every size
     comes before the next seed's, and MAZES.md has a row per robot and size."""

@@ -14,6 +14,9 @@ import pytest
 from tasks.protocols import PROTOCOL_VERSION
 from helpers import ROOT
 
+#: The slow tier (pyproject.toml's markers): the golden digests of every robot.
+pytestmark = pytest.mark.slow
+
 DIGESTS = ROOT / "tests" / "data" / f"step_digests_v{PROTOCOL_VERSION}.json"
 
 

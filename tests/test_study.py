@@ -10,7 +10,8 @@ import time
 import pytest
 
 optuna = pytest.importorskip("optuna")
-pytestmark = pytest.mark.filterwarnings("ignore:Heartbeat of storage:UserWarning")
+pytestmark = [pytest.mark.filterwarnings("ignore:Heartbeat of storage:UserWarning"),
+              pytest.mark.slow]  # the slow tier: study workers and their heartbeats
 
 
 @pytest.fixture

@@ -436,6 +436,7 @@ def test_radius_changes_the_body_and_the_readings():
     ("blocked_move", "bounce", "blocked_move must be one of stop, refuse"),
     ("leftover_turn", "left", "leftover_turn must be one of commanded, away"),
 ])
+@pytest.mark.slow
 def test_task_config_refuses_bad_values(field, value, message):
     with pytest.raises(ValueError, match=message):
         tasks.TaskConfig(**{field: value})

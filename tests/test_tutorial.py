@@ -12,6 +12,9 @@ import pytest
 
 from helpers import ROOT
 
+#: The slow tier (pyproject.toml's markers): the tutorial run as a process.
+pytestmark = pytest.mark.slow
+
 jupytext = pytest.importorskip("jupytext")  # the test extra's (make test installs it)
 SCRIPT, NOTEBOOK = ROOT / "docs" / "tutorial.py", ROOT / "docs" / "tutorial.ipynb"
 
