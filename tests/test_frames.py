@@ -314,6 +314,7 @@ def test_a_robot_that_leaves_the_room_raises(tmp_path):
         env.close()
 
 
+@pytest.mark.slow
 def test_a_run_whose_robot_leaves_the_room_is_a_failed_run(tmp_path):
     """The protocol's run (the compiled loop) of the ghost raises; recorded as a failed
     run of the kind "left the room", named, never averaged."""
