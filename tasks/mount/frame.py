@@ -163,9 +163,9 @@ def rest_values(mount) -> tuple[tuple[str, float], ...]:
     return tuple((name, value) for name, value, _ in pairs)
 
 
-def out_of_range(mount, field, model, j, value, how):
+def out_of_range(mount, field, model, j, value, how, advice=""):
     """MountError at `field` when `value` lies outside joint j's range (a limited joint
-    of the file's model)."""
+    of the file's model): `how` after the value, `advice` at the end."""
     if not model.jnt_limited[j]:
         return
     lo, hi = (float(v) for v in model.jnt_range[j])
@@ -177,7 +177,7 @@ def out_of_range(mount, field, model, j, value, how):
         degrees = (f" ({math.degrees(value):.0f} degrees, range {math.degrees(lo):.0f} to "
                    f"{math.degrees(hi):.0f})" if hinge else "")
         fail(mount.path, field, f"joint {name!r} rests at {value:.4g} {unit}{how}, outside its "
-                                f"range [{lo:.4g}, {hi:.4g}] {unit}{degrees}")
+                                f"range [{lo:.4g}, {hi:.4g}] {unit}{degrees}{advice}")
 
 
 def check_rests(mount, joints):
@@ -191,5 +191,5 @@ def check_rests(mount, joints):
         if j < 0 or name in given:
             continue
         out_of_range(mount, "rest", model, j, float(model.qpos0[model.jnt_qposadr[j]]),
-                     " in the file's qpos0 (give the mount a rest: rest = \"a keyframe of "
-                     "the file\" or a [rest] table of joint = value)")
+                     " in the file's qpos0", ": give the mount a rest (rest = \"a keyframe of "
+                     "the file\", or a [rest] table of joint = value)")
