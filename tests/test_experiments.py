@@ -391,7 +391,7 @@ def test_rendered_video_has_moving_frames(tmp_path, robot, camera):
     assert frames.shape[0] >= 30 and frames.shape[1:] == (480, 640, 3)
     assert np.abs(frames[-1].astype(int) - frames[0].astype(int)).mean() > 0.05
     bad = ebrl_here("render", "--robot", robot, "--condition", "avoidance", "--seed", "0",
-               "--camera", "ceiling", "--out", tmp_path / "x.mp4", check=False)
+               "--camera", "ceiling", "--out", tmp_path / "x.mp4")
     assert bad.returncode == 2 and "unknown camera 'ceiling'" in bad.stderr
     assert not (tmp_path / "x.mp4").exists()
 
@@ -458,5 +458,5 @@ def test_run_with_another_learner(tmp_path, agent):
     assert groups == {("two_wheel." + agent, agent), ("floating." + agent, agent)}
     assert f"two_wheel.{agent}" in (out / "REPORT.md").read_text()
     bad = ebrl_here("run", "--agent", agent, "--set", "policy_threshold=0.1", "--out",
-               tmp_path / "bad", check=False)
+               tmp_path / "bad")
     assert bad.returncode == 2 and f"not a parameter of the {agent} agent" in bad.stderr
