@@ -49,6 +49,11 @@ def main(argv=None):
     try:
         args = build_parser().parse_args(argv)
         return args.func(args)
+    except ValueError as e:  # a bad map, mount or robot file found at work (runner.check)
+        from experiments.running import runner
+        if runner.input_error(e) is None:
+            raise
+        return fail(str(e))
     except KeyboardInterrupt:
         print("ebrl: interrupted; finished runs are kept, rerun to resume", file=sys.stderr)
         return INTERRUPTED

@@ -45,6 +45,8 @@ MAPS = {
 RANDOM = re.compile(r"random:(\d+)x(\d+):(\d+)$")
 #: The random mazes' sizes, in inner cells.
 RANDOM_SIZES = (3, 31)
+#: The random mazes' seeds: labmaze's (a signed 32-bit integer, from 0).
+RANDOM_SEEDS = (0, 2**31 - 1)
 #: A room's widest side in units: runs store positions as int16 hundredths of a unit
 #: (experiments.running.execution.TRACE_SCALE), at most 327.67.
 MAX_EXTENT = 320.0
@@ -107,7 +109,9 @@ class Map:
                      if not self.wall(sc + dc, sr + dr)), 0.0)
 
     def text(self) -> str:
-        return f"# cell {self.cell:g}\n" + "\n".join(self.rows) + "\n"
+        """The map as a map file's text (its cell exact: 10, 0.001953125)."""
+        cell = f"{self.cell:g}" if float(f"{self.cell:g}") == self.cell else repr(self.cell)
+        return f"# cell {cell}\n" + "\n".join(self.rows) + "\n"
 
     def shortest_cells(self) -> int:
         """The fewest cell moves (4-neighbour) from the start cell to the goal cell."""
@@ -129,9 +133,10 @@ def reachable(m: Map) -> dict[tuple[int, int], int]:
 
 
 def parse(text: str, source: str, name: str | None = None) -> Map:
-    """The Map of a map's text; MapError naming source and what is wrong."""
+    """The Map of a map's text (a UTF-8 byte-order mark before it is ignored); MapError
+    naming source and what is wrong."""
     cell, rows, names = CELL, [], ()
-    for number, line in enumerate(text.splitlines(), 1):
+    for number, line in enumerate(text.removeprefix("\ufeff").splitlines(), 1):
         if line.startswith("#"):
             words = line[1:].split()
             if words[:1] == ["walls"]:
@@ -200,6 +205,9 @@ def random_map(width: int, height: int, seed: int) -> Map:
     lo, hi = RANDOM_SIZES
     if not (lo <= width <= hi and lo <= height <= hi):
         raise MapError(f"random:{width}x{height}:{seed}: sizes must be {lo}..{hi} cells")
+    if not RANDOM_SEEDS[0] <= seed <= RANDOM_SEEDS[1]:
+        raise MapError(f"random:{width}x{height}:{seed}: the seed must be {RANDOM_SEEDS[0]}.."
+                       f"{RANDOM_SEEDS[1]} (labmaze's seeds are 32-bit)")
     w, h = width + (width % 2 == 0), height + (height % 2 == 0)
     maze = labmaze.RandomMaze(height=h + 2, width=w + 2, random_seed=int(seed))
     grid = [list(line) for line in str(maze.entity_layer).splitlines()]
@@ -250,9 +258,11 @@ def load(room: str | pathlib.Path | Map | None = None) -> Map:
         raise MapError(f"no room {room!r}: a shipped map ({', '.join(MAPS)}), "
                        "random:WxH:SEED, or a map file")
     try:
-        text = path.read_text()
-    except (OSError, UnicodeDecodeError) as e:
-        raise MapError(f"{path}: cannot read: {e}") from None
+        text = path.read_bytes().decode("utf-8")
+    except OSError as e:
+        raise MapError(f"{path}: cannot read: {e.strerror or e}") from None
+    except UnicodeDecodeError as e:
+        raise MapError(f"{path}: not a UTF-8 text file (byte {e.start})") from None
     return parse(text, str(path))
 
 

@@ -517,7 +517,7 @@ def test_a_full_disk_at_each_report_file_is_one_line_and_keeps_the_last(reported
     turn, the figures, summary.json, REPORT.md, RESULTS.md): one line naming the folder,
     every file as it was; freed, the same command finishes."""
     from experiments import cli
-    from experiments.running import results
+    from experiments.running import disk, results
     root = reported
     before = snapshot(root)
     args = ["report", str(root / "results"), "--results", str(root / "RESULTS.md"),
@@ -526,13 +526,13 @@ def test_a_full_disk_at_each_report_file_is_one_line_and_keeps_the_last(reported
                             ("summary.json", root / "results"),
                             ("REPORT.md", root / "results"), ("RESULTS.md", root)):
         monkeypatch.setenv(results.TEST_DISK_FULL_AT, pattern)
-        monkeypatch.setattr(results, "_full", False)
+        monkeypatch.setattr(disk, "_full", False)  # the atomic write's
         capsys.readouterr()
         status = cli.main(args)
         full_disk_line(status, capsys.readouterr().err, folder)
         assert snapshot(root) == before and leftovers(root) == [], pattern
     monkeypatch.delenv(results.TEST_DISK_FULL_AT)
-    monkeypatch.setattr(results, "_full", False)
+    monkeypatch.setattr(disk, "_full", False)  # the atomic write's
     assert cli.main(args) == 0 and snapshot(root) == before
 
 

@@ -87,12 +87,13 @@ def pathlib_path(resource):
 
 def test_a_mount_of_our_own_two_wheel_file_runs_bit_for_bit_as_the_registered_robot(tmp_path):
     """Full protocol runs (both conditions, 1,500 steps) of a mount of models/two_wheel.xml
-    with the registered robot's body reading (its radius, tasks.robots) equal the
-    registered robot's trace and trial ends, bit for bit."""
+    with the registered robot's own body readings (its radius, blocked move and leftover
+    turn, tasks.robots) equal the registered robot's trace and trial ends, bit for bit."""
     path = tmp_path / "mine.toml"
-    radius = dict(tasks.ROBOTS["two_wheel"].readings)["radius"]
+    own = tasks.ROBOTS["two_wheel"].task_readings()
+    assert {"radius", "blocked_move", "leftover_turn"} <= set(own)
     path.write_text(CONTRACT_MOUNT.format(file=ROOT / "models" / "two_wheel.xml")
-                    + f"[readings]\nradius = {radius!r}\n")
+                    + "[readings]\n" + "".join(f"{k} = {v!r}\n" for k, v in own.items()))
     for condition in ("random", "avoidance"):
         mine = execution.execute(execution.RunSpec(str(path), condition, 3, 1500))
         ours = execution.execute(execution.RunSpec("two_wheel", condition, 3, 1500))

@@ -110,9 +110,12 @@ def _copy_robot(tmp_path, name, edit=None):
 @pytest.mark.slow
 def test_a_robot_file_outside_the_package_loads_and_runs(tmp_path):
     path = _copy_robot(tmp_path, "two_wheel")
-    # the registered robot's body reading (its radius) is its entry's, not its file's
+    # the registered robot's body readings (its radius, blocked move and leftover turn)
+    # are its entry's, not its file's or its drive's
     ours = tasks.load(str(path), drive="two_wheel", seed=4)
-    theirs = tasks.load("two_wheel", seed=4, radius=None)
+    drive = dict(tasks.protocols.ADOPTED.drives["two_wheel"])
+    theirs = tasks.load("two_wheel", seed=4, radius=None, blocked_move="stop",
+                        leftover_turn=drive["leftover_turn"])
     ours.reset(), theirs.reset()
     for a in np.linspace(-1, 1, 25):
         assert ours.step([a]).observation["range"].tolist() == theirs.step([a]).observation["range"].tolist()
@@ -242,9 +245,9 @@ def test_hovercraft_glides_and_a_bump_takes_most_of_its_speed_into_the_wall():
 
 
 def test_a_drives_readings_reach_its_robots_runs_and_set_overrides_them():
-    """The adopted protocol's readings (tasks.protocols.ADOPTED: every robot's, a drive's,
-    a robot's own on top) are each run's config; --set (a spec's overrides) changes any
-    of them. Both drives share one learner (ADOPTED.readings)."""
+    """Protocol 7's readings (tasks.protocols.ADOPTED: every robot's, a drive's, a robot's
+    own on top) are each run's config; --set (a spec's overrides) changes any of them.
+    Both drives share one learner and one fallback (ADOPTED.readings: LEARNER, FALLBACK)."""
     floating = dict(tasks.ROBOTS["floating"].readings)
     spec = execution.RunSpec("floating", "avoidance", 0, 10)
     agent, task = spec.agent_config(), spec.task_config()
@@ -252,7 +255,9 @@ def test_a_drives_readings_reach_its_robots_runs_and_set_overrides_them():
         dict(tasks.protocols.ADOPTED.readings)["policy_threshold"] > 0
     assert agent.initial_reliability == 1.0
     assert (agent.eq9_dead_zone, agent.random_in_avoidance, agent.random_demand) == \
-        ("keep", "replace", "uniform_walk")
+        ("keep", "replace", "gaussian") == (floating["eq9_dead_zone"],
+                                            *(dict(tasks.protocols.FALLBACK)[k] for k in
+                                              ("random_in_avoidance", "random_demand")))
     assert (task.bump, task.radius, task.velocity_code) == ("stop", floating["radius"], "code")
     assert agent.memory_size == 4096 and task.sensor_noise == 0.05 * 255   # Table 1, 3.2
     # The hovercraft shares the drive's readings, not the planar puck's body.
@@ -260,17 +265,21 @@ def test_a_drives_readings_reach_its_robots_runs_and_set_overrides_them():
     assert hover.agent_config() == agent
     assert hover.task_config().action_noise == task.action_noise == floating["action_noise"]
     assert (hover.task_config().bump, hover.task_config().radius) == ("grip", None)
-    # The two-wheel drive: its fallback's and move's readings, the same learner, the
-    # paper's 5% action noise; diff_drive keeps its own body (no radius reading).
+    # The two-wheel drive: the same learner and fallback, the paper's 5% action noise;
+    # diff_drive keeps its own body (no radius reading) and the drive's leftover turn.
     two = execution.RunSpec("diff_drive", "random", 0, 10)
     assert (two.agent_config().initial_reliability, two.agent_config().policy_threshold) == \
         (1.0, agent.policy_threshold)
     assert (two.agent_config().random_demand, two.agent_config().random_in_avoidance) == \
-        ("uniform_walk", "add")
+        (agent.random_demand, agent.random_in_avoidance)
     assert (two.task_config().leftover_turn, two.task_config().radius) == ("away", None)
     assert two.task_config().action_noise == 0.05
+    # The planar two-wheel robot's own body (protocol 7): the file's radius, a blocked move
+    # refused, the commanded leftover turn, over its drive's.
     planar = execution.RunSpec("two_wheel", "random", 0, 10).task_config()
-    assert planar.radius == dict(tasks.ROBOTS["two_wheel"].readings)["radius"] < 1.5
+    assert (planar.radius, planar.blocked_move, planar.leftover_turn) == \
+        (1.5, "refuse", "commanded")
+    assert two.task_config().blocked_move == "stop"
     over = execution.RunSpec("floating", "avoidance", 0, 10,
                             (("bump", "grip"), ("policy_threshold", 0.1)))
     assert (over.task_config().bump, over.agent_config().policy_threshold) == ("grip", 0.1)

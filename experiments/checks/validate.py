@@ -26,9 +26,20 @@ MAX_TRIALS = 100_000
 MAX_POPULATION = 1_000
 
 
+def once(values, what):
+    """values (a sequence), each given once; else ValueError naming the first given again
+    ("size 3x3 is given more than once"): a repeated value would make the same runs twice."""
+    seen = set()
+    for value in values:
+        if value in seen:
+            raise ValueError(f"{what} {value} is given more than once")
+        seen.add(value)
+    return values
+
+
 def seeds(text):
     """'0-49', '7' or '1,3,5' -> sorted list of seeds; refuses before expanding a range
-    past MAX_SEED, and more than MAX_SEEDS seeds."""
+    past MAX_SEED, more than MAX_SEEDS seeds, and a seed given twice ('0-9,5')."""
     chosen = set()
     for part in text.split(","):
         lo, sep, hi = part.strip().partition("-")
@@ -45,6 +56,9 @@ def seeds(text):
             raise ValueError(f"seeds go up to {MAX_SEED:,}, got {hi:,}")
         if hi - lo + 1 > MAX_SEEDS:
             raise ValueError(f"at most {MAX_SEEDS:,} seeds in one command, got {hi - lo + 1:,}")
+        again = min((s for s in chosen if lo <= s <= hi), default=None)
+        if again is not None:
+            raise ValueError(f"seed {again} is given more than once in {text!r}")
         chosen.update(range(lo, hi + 1))  # at most MAX_SEED + 1 numbers
         if len(chosen) > MAX_SEEDS:
             raise ValueError(f"at most {MAX_SEEDS:,} seeds in one command, got more in {text!r}")

@@ -37,6 +37,7 @@ def _readings(args):
     if unknown or not names:
         raise ValueError(f"unknown reading {unknown[0] if unknown else args.readings!r}; "
                          f"valid: {', '.join(ablation.BY_NAME)}")
+    validate.once(names, "--readings")
     return [ablation.BY_NAME[n] for n in names]
 
 
@@ -48,6 +49,7 @@ def _combos(args):
                  for part in text.split(",")]
         check_agent(args, combo)
         combos.append(combo)
+    validate.once([" ".join(f"{n}={v}" for n, v in sorted(c)) for c in combos], "--combo")
     return combos
 
 

@@ -25,6 +25,7 @@ def robot_list(text):
     if text.lower().endswith((".xml", ".toml")) or text in MOUNTS:
         return (text,)
     names = tuple(n.strip() for n in text.split(","))
+    argument(lambda _: validate.once(names, "robot"))(text)
     for n in names:
         if n not in ROBOTS and n not in MOUNTS:
             raise argparse.ArgumentTypeError(

@@ -38,27 +38,35 @@ def check_robots(args):
             check_room((robot,), room)
 
 
-def check_room(robots, room, drive=None):
-    """Each robot composed into the room (--room; None: the paper's, nothing to check):
-    models.rooms.MapError, one line, when a corridor is narrower than a robot."""
+def check_room(robots, room, drive=None, overrides=()):
+    """Each robot composed into the room (--room; None: the paper's, nothing to check)
+    with the task fields of overrides (--set radius=...): models.rooms.MapError, one
+    line, when a corridor is narrower than a robot."""
     if room is None:
         return
+    import dataclasses
+
     import tasks
     from tasks.robots import resolve
+    fields = {f.name for f in dataclasses.fields(tasks.TaskConfig)}
+    task = {k: v for k, v in overrides if k in fields}
     for robot in robots:
         entry = resolve(robot, drive)
-        tasks.compile_robot(entry, entry.task_config(), room)
+        tasks.compile_robot(entry, entry.task_config(**task), room)
 
 
 def check_agent(args, overrides):
-    """--set values (or a sweep's): each name once, and a config that ebrl.Config accepts
-    for every selected robot, checked here rather than in the workers."""
+    """--set values (or a sweep's): each name once, a config that ebrl.Config accepts
+    for every selected robot, and a robot that still fits the room's corridors (--set
+    radius), checked here rather than in the workers."""
     names = [name for name, _ in overrides]
     twice = next((name for name in names if names.count(name) > 1), None)
     if twice is not None:
         raise ValueError(f"--set {twice} is given more than once")
     validate.agent_configs(selected_robots(args), overrides, args.drive,
                            getattr(args, "agent", "ebrl"))
+    if overrides:  # a task field (radius) against the room's corridors
+        check_room(selected_robots(args), getattr(args, "room", None), args.drive, overrides)
 
 
 def check_behaviour(args, overrides=()):

@@ -76,6 +76,7 @@ def _check(args):
     if unknown or not names:
         raise ValueError(f"unknown reading {unknown[0] if unknown else args.space!r} in --space; "
                          f"valid: {', '.join(fit.BY_NAME)}")
+    validate.once(names, "--space")
     if not set(args.seeds) <= set(args.promote_seeds):
         raise ValueError("--promote-seeds must include every seed of --seeds")
     if args.validate is not None and set(args.validate) & set(args.promote_seeds):

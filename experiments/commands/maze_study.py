@@ -20,6 +20,9 @@ def sizes(text):
         if not (lo <= int(w) <= hi and lo <= int(h) <= hi):
             raise argparse.ArgumentTypeError(f"size {part!r}: sides must be {lo}..{hi} cells")
         out.append((int(w), int(h)))
+    if len(set(out)) < len(out):
+        again = next(s for k, s in enumerate(out) if s in out[:k])
+        raise argparse.ArgumentTypeError(f"size {again[0]}x{again[1]} is given more than once")
     return tuple(out)
 
 

@@ -73,7 +73,7 @@ def _baseline(args):
     if args.baseline is None:
         return None
     specs = plan(args)
-    if runner.pending(args.baseline, specs):
+    if runner.pending(args.baseline, specs, mend=False):  # a folder this command only reads
         raise results.ResultsError(f"{args.baseline} lacks some of these runs at the "
                                    f"default {args.param}; run them there first")
     return results.load_runs(args.baseline, specs)
@@ -99,7 +99,7 @@ def _sweep(args, values):
     from experiments.running import results, runner
     plans = [(args.out / f"{args.param}_{v}", plan(args, [(n, v)])) for n, v in values]
     baseline = _baseline(args)  # the default's runs, checked before running any
-    for folder, specs in plans:  # refuse damaged or mismatched folders before running any
+    for folder, specs in plans:  # refuse mismatched folders, set damaged runs aside, first
         runner.pending(folder, specs)
     # Every value's runs on one worker pool, value after value (a pool's start costs
     # about as much as a short value's runs); each run in its value's folder.

@@ -7,7 +7,8 @@ import pathlib
 import numpy as np
 
 from experiments import paper
-from experiments.running import lock, results
+from experiments.outputs import verdicts
+from experiments.running import lock, provenance, results
 from tasks.robots import DRIVES
 
 @functools.cache
@@ -303,8 +304,10 @@ def publish(root, results_md, figures_dir):
     for png in sorted((root / "figures").glob("*.png")):
         copy(png, figures_dir / png.name)
     rel = os.path.relpath(figures_dir, results_md.parent)
-    block = [BEGIN, "", *failed_section(summary, "###"),
+    block = [BEGIN, "", *provenance.lines(summary["provenance"]),
+             *failed_section(summary, "###"),
              "### Section 3.6, the paper against ours", "", comparison_table(summary), "",
+             *verdicts.section(summary["tests"], "###"),
              "### Goals within the budget", "", goals_table(summary), "",
              "### Qualitative claims", "", claims_table(summary), ""]
     if "optimal" in summary:
@@ -345,12 +348,18 @@ def build(root, room=False):
     path. room: only that room's runs (None: the paper's; False: every room's, each
     robot label's runs in its own room, models.rooms)."""
     root = pathlib.Path(root)
-    runs = results.load_runs(root, room=room)
+    damaged = {}  # run folders that cannot be read: skipped, one line each, counted below
+    runs = results.load_runs(root, room=room, damaged=damaged)
+    prov = provenance.of(runs, root)  # refuses to pool different protocols or parameters
     failed = results.failed_runs(root)  # named below, never averaged
     summary = results.summarize(runs)
+    summary["provenance"] = prov
+    summary["tests"] = verdicts.tested(summary)
     summary["locks"] = lock.of_runs(root, runs)  # the environments the runs were made in
     if failed:
         summary["failed"] = [{"run": name, "error": error} for name, error in failed.items()]
+    if damaged:
+        summary["damaged"] = [{"run": name, "reason": e.reason} for name, e in damaged.items()]
     figures = root / "figures"
     figures.mkdir(exist_ok=True)
     robots = sorted({k[0] for k in runs}, key=lambda r: (results.robot_order(r), r))
@@ -370,10 +379,12 @@ def build(root, room=False):
         f"# Report: {root}", "",
         f"{len(runs)} runs. Section 3.6 of Unemi (2000) beside ours; 95% intervals are "
         "percentile bootstraps over seeds.", "",
+        *provenance.lines(prov),
         "Environment: requirements.lock " + ", ".join(summary["locks"]) + " (config.json's "
         "versions.lock: the first 12 hex digits of its sha256).", "",
-        *failed_section(summary),
+        *failed_section(summary), *damaged_section(summary),
         "## Section 3.6 figures", "", comparison_table(summary), "",
+        *verdicts.section(summary["tests"]),
         "## Goals within the budget", "", goals_table(summary), "",
         "## Qualitative claims", "", claims_table(summary), *extra, "",
         "## Figures", "",
@@ -396,6 +407,17 @@ def failed_section(summary, heading="##"):
              + results.advice((f["error"] for f in failed), "run the command that made them "
                               "again") + ".",
              ""] + [f"- `{f['run']}`: {f['error']}" for f in failed] + [""])
+
+
+def damaged_section(summary):
+    """REPORT.md's list of the run folders skipped because their files cannot be read."""
+    damaged = summary.get("damaged")
+    if not damaged:
+        return []
+    return ([f"## Damaged runs: {len(damaged)}, skipped", "",
+             "Their files cannot be read; `ebrl run` moves them into the run folder's "
+             "damaged-<time>/ and makes the run again (docs/failures.md).", ""]
+            + [f"- `{d['run']}`: {d['reason']}" for d in damaged] + [""])
 
 
 def sweep_table(out, param, rows, failed=()):

@@ -9,153 +9,29 @@ A run that raised has instead a run.json with status "failed": its parameters, t
 error in one line and the traceback (write_failure). It is never averaged, the
 report names it, a rerun retries it, and advice() says whether that can help.
 """
-import contextlib
 import csv
-import errno
-import glob
 import io
 import json
-import os
 import pathlib
 import platform
 import re
-import socket
 import subprocess
-import tempfile
+import sys
 import traceback
 
 import numpy as np
 
 from experiments import paper
-from experiments.running import execution
+from experiments.running import execution, schema
+from experiments.running.disk import (TEST_DISK_FULL, TEST_DISK_FULL_AT,  # noqa: F401
+                                      ResultsError, WriteError, atomic_file, atomic_write,
+                                      tmp_prefix, write_error)
 
 BOOTSTRAP_SAMPLES = 10_000
 BOOTSTRAP_SEED = 20000  # the paper's year: any fixed number makes summaries reproducible
 
 
-class ResultsError(RuntimeError):
-    """A results folder that cannot be used as it is; the message names the file."""
-
-
-# -- writing -----------------------------------------------------------------------
-def _umask():
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
-_UMASK = _umask()
-
-
-class WriteError(ResultsError, OSError):
-    """A results folder that cannot take a write (full, read-only, gone): the message
-    names the folder; what is already on disk stays complete. An OSError too, so that a
-    command that does not catch it still ends in its one line (experiments.cli.main)."""
-
-
-#: Test only: EBRL_TEST_DISK_FULL=N makes the disk "fill up" in the driver after N run
-#: records: the next run.json write fails halfway with ENOSPC, and every write after it.
-TEST_DISK_FULL = "EBRL_TEST_DISK_FULL"
-#: Test only: EBRL_TEST_DISK_FULL_AT=PATTERN makes the disk "fill up" at the first file
-#: whose name matches the shell pattern (summary.json, *.png, FIT.md, *.mp4, ...): its
-#: write fails with ENOSPC after half of it is written, and every write after it.
-TEST_DISK_FULL_AT = "EBRL_TEST_DISK_FULL_AT"
-_records = 0  # run.json files this process wrote (for TEST_DISK_FULL)
-_full = False  # the disk "filled up" (TEST_DISK_FULL_AT)
-
-
-def _test_disk_full(path):
-    global _full
-    pattern = os.environ.get(TEST_DISK_FULL_AT)
-    if pattern:
-        import fnmatch
-        _full = _full or fnmatch.fnmatch(path.name, pattern)
-        return _full
-    limit = os.environ.get(TEST_DISK_FULL)
-    if not limit:
-        return False
-    return _records > int(limit) or (_records == int(limit) and path.name == "run.json")
-
-
-def write_error(path, e):
-    """The WriteError of an OSError met writing path: one line naming the folder."""
-    what = errno.errorcode.get(getattr(e, "errno", None), "")
-    return WriteError(f"cannot write {path.name} in {path.parent}: "
-                      f"{getattr(e, 'strerror', None) or e}{f' ({what})' if what else ''}; "
-                      "what is on disk is kept: free space (or make it writable) and rerun "
-                      "the same command to finish")
-
-
-def tmp_prefix(path, pid=None):
-    """A temporary file's name before its random part: the file's, this host's and the
-    writing process's, so that a later writer can tell a dead writer's leftover."""
-    return f".{path.name}.{socket.gethostname()}.{os.getpid() if pid is None else pid}."
-
-
-def _remove_dead_writers(path):
-    """Removes the temporary files of path that a process of this host left when it was
-    killed mid-write (SIGKILL runs no cleanup): those whose writer's pid no longer runs.
-    A live writer's file, or another host's, is never touched."""
-    host = f".{path.name}.{socket.gethostname()}."
-    for tmp in path.parent.glob(f"{glob.escape(host)}*.tmp"):
-        pid = tmp.name[len(host):].split(".", 1)[0]
-        if not pid.isdigit() or int(pid) == os.getpid():
-            continue
-        try:
-            os.kill(int(pid), 0)
-        except ProcessLookupError:
-            tmp.unlink(missing_ok=True)
-        except OSError:  # alive (another user's process), or not ours to judge
-            pass
-
-
-@contextlib.contextmanager
-def atomic_file(path):
-    """The one atomic write of every file a command writes (run records, summary.json,
-    REPORT.md, the figures, FIT.md, EVOLVE.md, RESULTS.md, videos): yields a temporary
-    path beside path to write; when the block ends, the file is synced and renamed over
-    path, so that path is either its old self or complete. A write that fails (a full
-    disk, a folder turned read-only or removed) raises WriteError naming the folder and
-    the error, and leaves no temporary file; one a killed writer left (SIGKILL) is removed
-    by the next write of the same file (_remove_dead_writers)."""
-    global _records
-    path = pathlib.Path(path)
-    tmp = None
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        _remove_dead_writers(path)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=tmp_prefix(path), suffix=".tmp")
-        os.close(fd)
-        tmp = pathlib.Path(tmp)
-        os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp makes 0600; results are for sharing
-        yield tmp
-        if _test_disk_full(path):
-            with open(tmp, "r+b") as f:
-                f.truncate(os.path.getsize(tmp) // 2)
-            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
-        with open(tmp, "rb") as f:
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException as e:
-        if tmp is not None:
-            try:
-                pathlib.Path(tmp).unlink(missing_ok=True)
-            except OSError:
-                pass
-        if isinstance(e, OSError) and not isinstance(e, WriteError):
-            raise write_error(path, e) from e
-        raise
-    if path.name == "run.json":
-        _records += 1
-
-
-def atomic_write(path, data):
-    """Writes bytes or text to path through atomic_file."""
-    with atomic_file(path) as tmp:
-        with open(tmp, "wb" if isinstance(data, bytes) else "w") as f:
-            f.write(data)
-
-
+# -- writing (ResultsError, WriteError and the atomic write: experiments.running.disk) ---
 def dumps(obj):
     return json.dumps(obj, indent=2, sort_keys=True) + "\n"
 
@@ -291,85 +167,175 @@ def write_failure(root, spec, error):
 
 
 # -- reading -----------------------------------------------------------------------
+class DamagedRun(ResultsError):
+    """A run folder whose files cannot be read (cut short, overwritten, edited): .folder
+    and .reason (schema.Damaged's). A report skips it and names it; a rerun sets its files
+    aside (schema.set_aside) and makes it again."""
+
+    def __init__(self, folder, reason):
+        super().__init__(f"{folder}: damaged run: {reason}")
+        self.folder, self.reason = pathlib.Path(folder), reason
+
+
+def warn(message):
+    """One warning line on stderr, as the commands' (ebrl: warning: ...)."""
+    print(f"ebrl: warning: {message}", file=sys.stderr, flush=True)
+
+
 def read_run_json(path):
-    """The run.json at path, or ResultsError naming the file when it is damaged."""
+    """The run.json at path, checked against its schema (experiments.running.schema:
+    required keys, types, finite numbers), or DamagedRun naming its folder."""
+    path = pathlib.Path(path)
     try:
-        run = json.loads(pathlib.Path(path).read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
-        raise ResultsError(f"{path} is corrupted ({type(e).__name__}); "
-                           "delete its run folder to rerun it") from None
-    if isinstance(run, dict) and run.get("status") == "failed" and isinstance(
-            run.get("parameters"), dict) and isinstance(run.get("error"), str):
-        return run
-    if not isinstance(run, dict) or run.get("status") != "complete" or not isinstance(
-            run.get("metrics"), dict) or not isinstance(run.get("parameters"), dict):
-        raise ResultsError(f"{path} is corrupted (not a complete run record); "
-                           "delete its run folder to rerun it")
+        return schema.read_record(path)
+    except schema.Damaged as e:
+        raise DamagedRun(path.parent, str(e)) from None
+
+
+def read_run(folder, root=None):
+    """The run record of a run folder, every file of it checked: run.json's schema, and
+    for a complete run trace.npz, trials.csv and config.json readable and agreeing with
+    it (and, given root, the record naming its folder). DamagedRun when any is not; the
+    one reader of run folders every command uses."""
+    folder = pathlib.Path(folder)
+    run = read_run_json(folder / "run.json")
+    try:
+        if root is not None:
+            schema.check_place(folder, root, run)
+        schema.check_files(folder, run)
+    except schema.Damaged as e:
+        raise DamagedRun(folder, str(e)) from None
     return run
 
 
-def existing(root, spec):
-    """'done' if a matching complete run is on disk, 'failed' if a failed one is (it
-    runs again), 'missing' if it must run.
+def examine(root, spec):
+    """(state, detail) of spec's run under root: ("done", record) for a matching complete
+    run, ("failed", record) for a failed one (it runs again), ("missing", None) for none
+    (or an unfinished one), ("damaged", DamagedRun) for a run folder that cannot be read.
 
-    Raises ResultsError when the folder holds a damaged run.json or a complete run
-    made with other parameters (never overwritten: use another --out)."""
-    path = run_dir(root, spec) / "run.json"
-    if not path.exists():
-        return "missing"
-    run = read_run_json(path)
+    Raises ResultsError when the folder holds a complete run made with other parameters
+    (never overwritten: use another --out), naming the parameters that differ."""
+    folder = run_dir(root, spec)
+    if not (folder / "run.json").exists():
+        return "missing", None
+    try:
+        run = read_run(folder, root)
+    except DamagedRun as e:
+        return "damaged", e
     if run["status"] == "failed":
-        return "failed"
-    if run["parameters"] != json.loads(json.dumps(spec.parameters())):
-        raise ResultsError(f"{path} holds a run made with other parameters "
-                           f"(steps {run['parameters'].get('steps')}); use another --out")
-    return "done"
+        return "failed", run
+    asked = json.loads(json.dumps(spec.parameters()))
+    if run["parameters"] != asked:
+        raise ResultsError(f"{folder / 'run.json'} holds a run made with other parameters "
+                           f"({schema.differences(run['parameters'], asked)}); use another "
+                           "--out")
+    return "done", run
 
 
-def load_runs(root, specs=None, room=False):
+def existing(root, spec, mend=False):
+    """'done' if a matching complete run is on disk, 'failed' if a failed one is (it
+    runs again), 'missing' if it must run, 'damaged' if its folder cannot be read; with
+    mend, a damaged folder's files are set aside (set_aside) and it is 'missing'.
+
+    Raises ResultsError when the folder holds a complete run made with other parameters
+    (never overwritten: use another --out)."""
+    state, detail = examine(root, spec)
+    if state == "damaged" and mend:
+        set_aside(detail)
+        return "missing"
+    return state
+
+
+def set_aside(damaged):
+    """Moves a damaged run's files (a DamagedRun) into its folder's damaged-<time>/
+    subfolder, never deleting them, with one warning line; its run is then made again."""
+    try:
+        aside = schema.set_aside(damaged.folder)
+    except OSError as e:
+        raise write_error(damaged.folder / "run.json", e) from e
+    warn(f"{damaged}; its files moved to {aside}, the run is made again")
+    return aside
+
+
+def _scan(root, paths):
+    """(complete runs, failed runs, damaged runs) of the run.json paths under root: run
+    folder name -> record, for the damaged ones -> DamagedRun."""
+    complete, failed, damaged = {}, {}, {}
+    for path in paths:
+        name = path.parent.relative_to(root).as_posix()
+        try:
+            run = read_run(path.parent, root)
+        except DamagedRun as e:
+            damaged[name] = e
+            continue
+        (failed if run["status"] == "failed" else complete)[name] = run
+    return complete, failed, damaged
+
+
+def load_runs(root, specs=None, room=False, damaged=None):
     """Every complete run under root (or only those of specs), as
     (robot, condition, seed) -> run.json dict. Failed runs are left out (see
     failed_runs). room: only the runs in that room (None: the paper's; False: all). A
     run's robot (its label) names its room, so runs in different rooms never share a key
-    (execution.RunSpec.label)."""
+    (execution.RunSpec.label). A damaged run folder (read_run) is skipped with one
+    warning line naming it; damaged, a dict, receives them (run folder name ->
+    DamagedRun)."""
     root = pathlib.Path(root)
     if not root.is_dir():
         raise ResultsError(f"no results folder at {root}")
-    runs, failed = {}, []
     paths = (sorted(root.glob("*/*/seed_*/run.json")) if specs is None
              else [run_dir(root, spec) / "run.json" for spec in specs])
-    for path in paths:
-        run = read_run_json(path)
-        if run["status"] == "failed":
-            failed.append(run["error"])
-            continue
+    missing = [p for p in paths if not p.exists()]
+    if specs is not None and missing:  # runs asked for by name: each must be on disk
+        raise ResultsError(f"no run at {missing[0]}"
+                           + (f" (and {len(missing) - 1} more)" if len(missing) > 1 else ""))
+    complete, failed, broken = _scan(root, [p for p in paths if p.exists()])
+    for error in broken.values():
+        warn(f"{error}; skipped (`ebrl run` moves its files aside and makes it again)")
+    if damaged is not None:
+        damaged.update(broken)
+    runs = {}
+    for run in complete.values():
         p = run["parameters"]
         if room is not False and p.get("room") != room:
             continue
         runs[(p["robot"], p["condition"], p["seed"])] = run
     if not runs:
+        errors = [run["error"] for run in failed.values()]
         raise ResultsError(f"no complete runs under {root}"
                            + ("" if room is False else f" in room {room or 'sutton'}")
-                           + (f" ({len(failed)} failed: {advice(failed, 'rerun `ebrl run`')})"
-                              if failed else ""))
+                           + (f" ({len(errors)} failed: {advice(errors, 'rerun `ebrl run`')})"
+                              if errors else "")
+                           + (f" ({len(broken)} damaged, skipped)" if broken else ""))
     return runs
 
 
 def failed_runs(root):
     """The failed runs under root, as run folder name (robot/condition/seed_NNN) -> the
-    one-line error recorded in its run.json."""
+    one-line error recorded in its run.json (damaged folders left out: load_runs names
+    them)."""
+    root = pathlib.Path(root)
     failed = {}
-    for path in sorted(pathlib.Path(root).glob("*/*/seed_*/run.json")):
-        run = read_run_json(path)
+    for path in sorted(root.glob("*/*/seed_*/run.json")):
+        try:
+            run = read_run_json(path)
+        except DamagedRun:
+            continue
         if run["status"] == "failed":
             failed[path.parent.relative_to(root).as_posix()] = run["error"]
     return failed
 
 
 def load_trace(root, robot, condition, seed):
-    with np.load(pathlib.Path(root) / robot / condition / f"seed_{seed:03d}" / "trace.npz") as z:
-        scale = float(z["scale"])
-        return z["trace"] / scale, z["starts"] / scale, z["trial_ends"]
+    """(positions, starts, trial ends) of a run's trace.npz, positions in units;
+    DamagedRun when it cannot be read (read_run checks it first)."""
+    folder = pathlib.Path(root) / robot / condition / f"seed_{seed:03d}"
+    try:
+        with np.load(folder / "trace.npz") as z:
+            scale = float(z["scale"])
+            return z["trace"] / scale, z["starts"] / scale, z["trial_ends"]
+    except Exception as e:  # changed since it was checked: zipfile's, zlib's, numpy's errors
+        raise DamagedRun(folder, f"trace.npz cannot be read ({type(e).__name__})") from None
 
 
 def trial_paths(trace, starts, trial_ends):
@@ -449,7 +415,9 @@ def summarize(runs):
             "shrink": shrink, "shrink_ci95": shrink_ci,
             "goals": {"min": int(min(goals)), "median": float(np.median(goals)),
                       "max": int(max(goals)), "mean": float(np.mean(goals)),
-                      "below_30": int(sum(g < 30 for g in goals))},
+                      "below_30": int(sum(g < 30 for g in goals)),
+                      "below_49": int(sum(g < paper.TWO_WHEEL_GOALS["avoidance_min"]
+                                          for g in goals))},
             "memory_decision_rate": float(np.mean([
                 runs[(robot, condition, s)]["memory_decisions"]
                 / runs[(robot, condition, s)]["parameters"]["steps"] for s in seeds])),

@@ -29,6 +29,7 @@ wait while PATH exists, so a test can take a Ray node away, or add one, with run
 flight. They exist for the tests of failure handling and are never set otherwise.
 """
 import collections
+import dataclasses
 import logging
 import os
 import signal
@@ -76,11 +77,50 @@ def folder_of(out):
     return out if callable(out) else (lambda spec: out)
 
 
-def pending(out, specs):
+def pending(out, specs, mend=True):
     """The specs without a matching complete run under out (a folder, or a function
-    spec -> folder), failed ones included (ResultsError if damaged)."""
+    spec -> folder), failed and damaged ones included; with mend, a damaged run's files
+    are set aside first (results.set_aside: one warning line each). ResultsError for a
+    run made with other parameters."""
     where = folder_of(out)
-    return [s for s in specs if results.existing(where(s), s) != "done"]
+    return [s for s in specs if results.existing(where(s), s, mend=mend) != "done"]
+
+
+def check(specs):
+    """Everything a run needs that the driver can build, built here before any work:
+    each distinct robot, protocol, room and settings' configs and model (the model is
+    composed into its room: a corridor narrower than the robot is models.rooms.MapError,
+    one line), as the driver builds them again to write the run (cached)."""
+    seen = set()
+    for spec in specs:
+        key = dataclasses.replace(spec, condition="random", seed=0, steps=1)
+        try:
+            if key in seen:
+                continue
+            seen.add(key)
+        except TypeError:  # an unhashable genome: check it each time
+            pass
+        spec.parameters()
+
+
+#: Our one-line errors of a bad input (a map, a mount, a robot file), by module and class
+#: (looked up only once one is raised, so nothing is imported for them). Raised in a
+#: worker, one ends the command as it would in the driver (input_error): every run of the
+#: input would fail alike, so none is recorded as a failed run.
+INPUT_ERRORS = (("models.rooms", "MapError"), ("tasks.mount.fields", "MountError"),
+                ("models", "ContractError"))
+
+
+def input_error(error):
+    """The error (a Ray task error's own .cause) if it is one of INPUT_ERRORS, with no
+    worker traceback attached; else None."""
+    cause = getattr(error, "cause", None)
+    error = cause if isinstance(cause, BaseException) else error
+    classes = tuple(getattr(sys.modules.get(module), name, None) for module, name in INPUT_ERRORS)
+    if not isinstance(error, tuple(c for c in classes if isinstance(c, type))):
+        return None
+    error.__cause__, error.__suppress_context__ = None, True
+    return error.with_traceback(None)
 
 
 def _selected(variable, spec):
@@ -121,8 +161,10 @@ def _execute(spec):
 
 def run(specs, out, *, workers=None, backend="local", progress=True):
     """Runs the specs not yet done under out (a folder, or a function spec -> folder;
-    failed ones again); returns a Ran."""
+    failed and damaged ones again), after checking them (check); returns a Ran. A worker
+    that raises one of INPUT_ERRORS stops the command with that error."""
     where = folder_of(out)
+    check(specs)
     todo = pending(where, specs)
     if not todo:
         return Ran(0, len(specs), [])
@@ -138,6 +180,8 @@ def run(specs, out, *, workers=None, backend="local", progress=True):
 
     def done(spec, result=None, error=None):
         nonlocal steps_done
+        if error is not None and input_error(error) is not None:
+            raise input_error(error)  # a bad input: the command's one line, exit status 2
         if error is not None:
             failed.append((spec, results.write_failure(where(spec), spec, error)))
         else:
@@ -361,13 +405,15 @@ def _import_ray():
 
 def _init_ray(ray, workers):
     """Connects to the cluster at RAY_ADDRESS, or starts one here with `workers` CPUs."""
-    address = os.environ.get("RAY_ADDRESS") or None
+    # Without RAY_ADDRESS, "local": ray.init(address=None) would join whichever cluster this
+    # machine started last (Ray reads it from its temp folder), not start ours.
+    address = os.environ.get("RAY_ADDRESS") or "local"
     # The test-only hooks travel to workers that a cluster started elsewhere runs.
     env = dict(_SINGLE_THREAD, **{k: os.environ[k] for k in (TEST_FAIL, TEST_CRASH, TEST_HOLD)
                                   if os.environ.get(k)})
     kwargs = {"address": address, "include_dashboard": False, "log_to_driver": False,
               "logging_level": logging.WARNING, "runtime_env": {"env_vars": env}}
-    if address is None:
+    if address == "local":
         kwargs["num_cpus"] = workers or os.cpu_count() or 1
     ray.init(**kwargs)
 

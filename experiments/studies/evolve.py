@@ -70,6 +70,8 @@ def fields(genome, chosen="all", learning=True):
         if unknown is not None or not names:
             raise ValueError(f"unknown field {unknown or chosen!r} in --space for "
                              f"{genome.behaviour}; valid: {', '.join(have)}")
+        from experiments.checks.validate import once
+        once(names, "--space")
         if not learning and any(n in LEARNING_FIELDS for n in names):
             raise ValueError("--space names a learning variable, which --no-learning leaves "
                              "unused: " + ", ".join(n for n in names if n in LEARNING_FIELDS))

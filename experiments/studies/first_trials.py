@@ -77,7 +77,8 @@ def space(drive, text="all"):
     if unknown or not names:
         raise ValueError(f"unknown reading {unknown[0] if unknown else text!r} in --space "
                          f"for --stage {STAGE} --robot {drive}; valid: {', '.join(mine)}")
-    return names
+    from experiments.checks.validate import once
+    return once(names, "--space")
 
 
 def default(name, robot):

@@ -61,6 +61,20 @@ class Fields:
             self.fail(where, f"must be positive, got {v!r}")
         return float(v)
 
+    def within(self, v, allowed, where: str):
+        """v if an ebrl.readings.Range allows it, else the field's MountError saying the
+        range ("must be at least 0.001, got 1e-300")."""
+        problem = allowed.problem(v)
+        if problem is not None:
+            self.fail(where, f"{problem}, got {v!r}")
+        return v
+
+    def ranged(self, d: dict, key: str, where: str, allowed, default=None):
+        """d[key] within the Range allowed, as a float (default when absent)."""
+        if key not in d:
+            return default
+        return float(self.within(d[key], allowed, where))
+
     def names(self, d: dict, key: str, where: str, valid=None) -> tuple[str, ...]:
         v = d.get(key, [])
         if not isinstance(v, list) or not all(isinstance(x, str) and x for x in v):

@@ -384,8 +384,6 @@ class Gait(Action):
 
     @classmethod
     def parse(cls, fields, table, drive):
-        import math
-
         from tasks.realisations import gait
         listed = table.get("legs")
         if listed is None:
@@ -422,8 +420,7 @@ class Gait(Action):
         for k, v in g.items():
             if k not in gait.PARAMETERS:
                 fields.fail(f"action.gait.{k}", f"unknown key; valid: {', '.join(gait.PARAMETERS)}")
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                fields.fail(f"action.gait.{k}", f"must be a number, got {v!r}")
+            fields.within(v, gait.RANGES[k], f"action.gait.{k}")
         return cls(tuple(legs), tuple(sorted((k, float(v)) for k, v in g.items())))
 
     def claimed(self):

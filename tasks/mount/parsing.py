@@ -5,6 +5,7 @@ from __future__ import annotations
 import importlib.util
 import pathlib
 
+from ebrl.readings import Range
 from tasks.mount.fields import Fields, MountError, read
 from tasks.mount.frame import FORWARDS
 from tasks.mount.kinds import KINDS
@@ -25,6 +26,12 @@ OPTIONS = ("timestep", "integrator", "flags")
 #: kinds' registration order.
 ACTIONS = {drive: tuple(name for name, kind in KINDS.items() if drive in kind.drives)
            for drive in BEAMS}
+
+#: The top table's numbers: metres per paper unit (the paper's 0.1; the room is scaled by
+#: unit / 0.1), MuJoCo's timestep (s) and the registry's time_scale.
+UNIT = Range(float, 0.001, 100.0, high_note=" m per paper unit")
+TIMESTEP = Range(float, 1e-4, 1.0, high_note=" s")
+TIME_SCALE = Range(float, 0.0, 1000.0, low_open=True)
 
 _TOP = {"name", "description", "file", "drive", "unit", "base", "joints", "drop",
         "drop_geoms", "drop_bodies", "keep_options", "timestep", "integrator", "time_scale",
@@ -65,21 +72,28 @@ def parse(path: str | pathlib.Path) -> Mount:
     action = _parse_action(fields, data, drive, joints)
     readings, check = _parse_tables(fields, data, drive)
     integrator = _parse_integrator(fields, data)
-    text, number, names = fields.text, fields.number, fields.names
+    text, ranged, names = fields.text, fields.ranged, fields.names
     return Mount(path=path.resolve(), name=text(data, "name", "name", path.stem),
                  file=data["file"], model=model, drive=drive,
-                 unit=number(data, "unit", "unit", 0.1), base=text(data, "base", "base"),
+                 unit=ranged(data, "unit", "unit", UNIT, 0.1), base=text(data, "base", "base"),
                  joints=joints, drop=names(data, "drop", "drop", DROPS),
                  drop_geoms=names(data, "drop_geoms", "drop_geoms"),
                  drop_bodies=names(data, "drop_bodies", "drop_bodies"),
                  keep_options=names(data, "keep_options", "keep_options", OPTIONS),
                  bumper=bumper, beams=beams, action=action,
-                 timestep=number(data, "timestep", "timestep"), integrator=integrator,
-                 time_scale=number(data, "time_scale", "time_scale", 1.0),
+                 timestep=ranged(data, "timestep", "timestep", TIMESTEP), integrator=integrator,
+                 time_scale=ranged(data, "time_scale", "time_scale", TIME_SCALE, 1.0),
                  condim=_parse_condim(fields, data, joints),
                  forward=_parse_forward(fields, data, drive), rest=_parse_rest(fields, data),
                  readings=readings, check=check,
-                 description=str(data.get("description", "")))
+                 description=_description(fields, data))
+
+
+def _description(fields, data):
+    v = data.get("description", "")
+    if not isinstance(v, str):
+        fields.fail("description", f"must be a string, got {v!r}")
+    return v
 
 
 def _parse_top(fields, data):
@@ -159,9 +173,13 @@ def _parse_action(fields, data, drive, joints) -> Action:
 def _parse_tables(fields, data, drive):
     """Mount.readings and Mount.check, from the readings and check tables."""
     fail = fields.fail
-    readings = data.get("readings", {})
-    if not isinstance(readings, dict):
-        fail("readings", "must be a table")
+    from tasks.readings import BY_NAME
+    readings = fields.table(data.get("readings", {}), set(BY_NAME), "readings")
+    for k, v in readings.items():  # each through the readings' registry (tasks.readings)
+        try:
+            BY_NAME[k].check(v)
+        except ValueError as e:
+            fail(f"readings.{k}", str(e).removeprefix(f"{k} "))
     check = data.get("check", {})
     if not isinstance(check, dict):
         fail("check", "must be a table")
@@ -169,9 +187,13 @@ def _parse_tables(fields, data, drive):
     for k in check:
         if k not in valid:
             fail(f"check.{k}", f"unknown key; valid: {', '.join(valid)}")
-        fields.number(check, k, f"check.{k}", positive=k != "falls")
+        fields.ranged(check, k, f"check.{k}", FALLS if k == "falls" else Range(float, 0.0, low_open=True))
     return (tuple(sorted(readings.items())),
             tuple(sorted((k, float(v)) for k, v in check.items())))
+
+
+#: [check]'s falls: a count of falls allowed in `ebrl check`'s fuzz.
+FALLS = Range(int, 0)
 
 
 def _parse_integrator(fields, data):

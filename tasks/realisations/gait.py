@@ -46,6 +46,7 @@ import math
 import mujoco
 import numpy as np
 
+from ebrl.readings import Range
 from tasks import navigation
 from tasks.actuators import OTHER_ADVICE, control_ranges, length_gains, model_kind, \
     model_why_other
@@ -71,6 +72,26 @@ PARAMETERS = {
     "control_substeps": 1,     # substeps per CPG and PD update
     "feedback_seconds": 0.05,  # seconds between heading and distance feedback updates
     "max_tilt": 30.0,          # degrees: a base tilted further at a phase's end has fallen
+}
+
+#: Each parameter's allowed values (a mount's [action.gait] is checked against them when
+#: it is parsed, tasks.mount.kinds.Gait).
+RANGES = {
+    "frequency": Range(float, 0.0, 100.0, low_open=True, high_note=" cycles per second"),
+    "amplitude": Range(float, 0.0, math.pi, high_note=" rad"),
+    "lift": Range(float, 0.0, math.pi, high_note=" rad"),
+    "kp": Range(float, 0.0, low_open=True),
+    "kd": Range(float, 0.0),
+    "heading_gain": Range(float, 0.0, low_open=True),
+    "turn_tolerance": Range(float, 0.0, math.pi, low_open=True, high_note=" rad"),
+    "slow_down": Range(float, 0.0),
+    "coast": Range(float, 0.0, 2.0, high_open=True, high_note=" units (a move is 2 at most)"),
+    "max_turn_seconds": Range(float, 0.0, 3600.0, low_open=True),
+    "max_move_seconds": Range(float, 0.0, 3600.0, low_open=True),
+    "settle_seconds": Range(float, 0.0, 3600.0),
+    "control_substeps": Range(int, 1, 1000),
+    "feedback_seconds": Range(float, 0.0, 3600.0, low_open=True),
+    "max_tilt": Range(float, 0.0, 180.0, low_open=True, high_note=" degrees"),
 }
 
 #: A leg as a mount lists it: its swing joint (moves the foot fore and aft), its lift

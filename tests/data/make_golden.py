@@ -75,7 +75,7 @@ def write_traces(folder):
 
 
 #: Readings tried beyond each robot's own, by robot (the step digests).
-EXTRA_FIELDS = {"two_wheel": [{"blocked_move": "refuse"}], "diff_drive": [{"blocked_move": "refuse"}],
+EXTRA_FIELDS = {"two_wheel": [{"blocked_move": "stop"}], "diff_drive": [{"blocked_move": "refuse"}],
                 "floating": [{"bump": "bounce", "velocity_noise": 0.1}],
                 "hovercraft": [{"bump": "bounce", "velocity_noise": 0.1}]}
 

@@ -1,0 +1,60 @@
+"""Protocol 7's rules (issue 48), read from the run records the protocol writes, not from
+prose: every random action Section 3.4's Gaussian (mean 0, sd 0.5) for both robots, and one
+learner and one fallback: every agent reading the same for both robots but Table 1's memory
+size and eq 9's dead zone (the floating robot's own equation)."""
+import json
+
+import pytest
+
+import helpers
+from experiments.running import execution
+from tasks.protocols import PROTOCOL_VERSION
+from tasks.robots import PAPER_ROBOTS, ROBOTS
+
+#: The agent fields that may differ between the two robots: Table 1's memory size (its one
+#: per-robot value) and eq 9's dead zone (eq 9 is the floating robot's fallback alone).
+PER_ROBOT = {"memory_size", "eq9_dead_zone"}
+#: Table 1, shared by both robots.
+TABLE1 = {"recall_size": 7, "alpha": 0.5, "exploration_rate": 0.05, "discount": 0.99,
+          "time_discount": 0.99, "reliability_rate": 0.5}
+
+
+@pytest.fixture(scope="module")
+def records(tmp_path_factory):
+    out = tmp_path_factory.mktemp("p7") / "results"
+    helpers.ebrl("run", "--robot", "paper", "--condition", "all", "--seeds", "0",
+                 "--steps", "50", "--workers", "1", "--no-progress", "--out", out, check=True)
+    return {(p.parts[-4], p.parts[-3]): json.loads(p.read_text())["parameters"]
+            for p in out.glob("*/*/seed_*/run.json")}
+
+
+def test_every_random_action_is_section_3_4s_gaussian(records):
+    assert len(records) == 4
+    for (robot, condition), p in records.items():
+        assert p["protocol_version"] == PROTOCOL_VERSION == 7
+        agent = p["agent"]
+        assert agent["random_demand"] == "gaussian", (robot, condition)
+        assert agent["random_sd"] == 0.5 and agent["intrinsic_random_rate"] == 0.2
+
+
+def test_one_learner_and_one_fallback_for_both_robots(records):
+    for condition in ("random", "avoidance"):
+        tw, fl = (records[(r, condition)]["agent"] for r in PAPER_ROBOTS)
+        assert set(tw) == set(fl)
+        differ = {k for k in tw if tw[k] != fl[k]}
+        assert differ <= PER_ROBOT, differ
+        assert (tw["memory_size"], fl["memory_size"]) == (1024, 4096)  # Table 1
+        assert {k: tw[k] for k in TABLE1} == TABLE1 == {k: fl[k] for k in TABLE1}
+        assert tw["random_in_avoidance"] == fl["random_in_avoidance"]
+        assert tw["policy_threshold"] == fl["policy_threshold"]
+
+
+def test_every_registered_robot_has_the_one_learner():
+    """Every registered robot's agent config (the 3D robots inherit their drive's) agrees
+    with the two-wheel robot's but for the per-robot fields."""
+    import dataclasses
+    base = dataclasses.asdict(execution.RunSpec("two_wheel", "avoidance", 0, 10).agent_config())
+    for name in ROBOTS:
+        mine = dataclasses.asdict(execution.RunSpec(name, "avoidance", 0, 10).agent_config())
+        assert {k for k in base if base[k] != mine[k]} <= PER_ROBOT, name
+        assert mine["random_demand"] == "gaussian"
