@@ -157,7 +157,8 @@ def test_a_bad_input_met_in_a_worker_is_our_one_line_not_a_remote_traceback(tmp_
             proc.communicate()
     assert proc.returncode == 2, stderr
     assert "Traceback" not in stderr and "_RemoteTraceback" not in stderr
+    # protocol 7's two-wheel body: radius 1.5 units (tasks.protocols.ADOPTED's robots)
     assert stderr.strip().splitlines()[-1] == (
         f"ebrl: error: {room}: corridors of 2 units are narrower than the robot "
-        "(2.73 units across); set '# cell N' larger")
+        "(3 units across); set '# cell N' larger")
     assert not list(pathlib.Path(out).rglob("run.json"))

@@ -237,6 +237,8 @@ def test_each_actuator_kind_and_the_term_that_makes_one_none(tmp_path):
 REFUSED = [
     ("cart", {"extra": 'forward = "z"'}, "forward: axis z of body 'cart' points up"),
     ("cart", {"extra": 'forward = "sideways"'}, "forward: must be one of x, y, z"),
+    ("cart", {"extra": "forward = [1]"}, "forward: must be one of x, y, z, -x, -y, -z, got [1]"),
+    ("cart", {"extra": '[rest]\nantenna = "up"'}, "rest.antenna: must be a number, got 'up'"),
     ("tricycle", {"spin": 'gainprm="100" biastype="affine" biasprm="0 -50 0"'},
      "action.kind: joint_motors need the joints' actuators to act as torque motors, "
      "position servos or velocity servos; 'spin' is none: bias: its length term"),

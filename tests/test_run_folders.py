@@ -129,7 +129,7 @@ def test_ebrl_report_skips_damaged_runs_and_counts_them(tmp_path):
 
 @pytest.mark.parametrize("args, said", [
     (["--protocol", "literal"], "(protocol: adopted on disk, literal asked; agent."),
-    (["--set", "radius=2"], "(task.radius: 1.36"),
+    (["--set", "radius=2"], "(task.radius: 1.5 on disk, 2.0 asked)"),  # protocol 7's body
     (["--set", "policy_threshold=0.1"], "(agent.policy_threshold: 0.3 on disk, 0.1 asked)"),
 ])
 def test_a_resume_into_other_parameters_names_them(tmp_path, args, said):

@@ -227,7 +227,7 @@ def _parse_condim(fields, data, joints):
 def _parse_forward(fields, data, drive):
     """The forward field: the base's axis the robot moves along (FORWARDS; default x)."""
     v = data.get("forward", "x")
-    if v not in FORWARDS:
+    if not isinstance(v, str) or v not in FORWARDS:
         fields.fail("forward", f"must be one of {', '.join(FORWARDS)}, got {v!r}")
     if v != "x" and drive != "two_wheel":
         fields.fail("forward", f"the {drive} drive has no forward axis (its beams and "
