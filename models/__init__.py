@@ -31,6 +31,13 @@ UNIT_NUMERIC = "ebrl_unit"
 #: The text element of a mounted model that maps the naming contract's names to the
 #: file's ("base=torso hull=pointbody ..."; tasks.mount).
 NAMES_TEXT = "ebrl_names"
+#: The text element of a mounted model that holds its rest pose, the file's joints'
+#: values ("ankle_1=1.0 ..."; tasks.mount.frame), read by rest_qpos (qpos0 is the
+#: joints' reference, where the file's bodies stand: it is left as it is).
+REST_TEXT = "ebrl_rest"
+#: The site a mount adds on a robot's base with the robot's frame (x forward, z up) where
+#: it is not the base's own (tasks.mount.frame); the pose is read from it.
+FRAME_SITE = "ebrl_frame"
 
 MODEL_DIR = pathlib.Path(__file__).resolve().parent
 
@@ -123,6 +130,23 @@ def contract_names(model):
     adr, size = int(m.text_adr[i]), int(m.text_size[i])
     text = bytes(m.text_data[adr: adr + size]).rstrip(b"\0").decode()
     return dict(pair.split("=", 1) for pair in text.split())
+
+
+def rest_qpos(model):
+    """The robot's rest pose in a composed model (an MjModel): its qpos0, with the values
+    its mount's rest records (REST_TEXT) in a copy; qpos0 itself without one."""
+    import mujoco
+    i = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_TEXT, PREFIX + REST_TEXT)
+    if i < 0:
+        return model.qpos0
+    adr, size = int(model.text_adr[i]), int(model.text_size[i])
+    text = bytes(model.text_data[adr: adr + size]).rstrip(b"\0").decode()
+    rest = model.qpos0.copy()
+    for pair in text.split():
+        name, value = pair.split("=", 1)
+        j = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, PREFIX + name)
+        rest[model.jnt_qposadr[j]] = float(value)
+    return rest
 
 
 def room_layout(model):

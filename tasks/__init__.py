@@ -24,7 +24,7 @@ from dm_control.rl import control  # noqa: E402
 import models  # noqa: E402
 from models import rooms  # noqa: E402
 
-from tasks import navigation, render  # noqa: E402
+from tasks import navigation, placement, render  # noqa: E402
 from tasks.config import TaskConfig  # noqa: E402
 from tasks.realisations import REALISATIONS  # noqa: E402
 from tasks.robots import DRIVES, MOUNTS, PAPER_ROBOTS, ROBOTS, Robot, resolve  # noqa: E402
@@ -138,6 +138,7 @@ def load(robot: str | os.PathLike | Robot, *, drive: str | None = None, seed: in
                                          if entry.mount is not None else {}))
     try:
         physics = physics_cls.from_model(wrapper.MjModel(model))
+        placement.check_start(physics, heading=entry.drive == "two_wheel")
     except navigation.ContractError as e:
         raise navigation.ContractError(f"{_source(entry)}: {e}") from None
     task = task_cls(config, time_scale=entry.time_scale, random=np.random.RandomState(seed))

@@ -3,8 +3,10 @@ realisations on a file's own actuators (tasks.realisations: wheel_motors, joint_
 gait) and the mount kinds that check a file before it is loaded (tasks.mount.kinds).
 
 - `kind`: an actuator's kind by its gain, bias and activation dynamics (not by its
-  element's name): a torque motor, a position servo or a velocity servo (KINDS), or None.
-  `model_kind` reads a compiled model's actuator, `spec_kind` an MjSpec's.
+  element's name): a torque motor, a position servo or a velocity servo (KINDS), or None
+  (`why_other`: the term, gain, bias or dyn, that makes it none of them). `model_kind`
+  reads a compiled model's actuator, `spec_kind` an MjSpec's (and `model_why_other`,
+  `spec_why_other`).
 - `joints_moved`: the joints an MjSpec's actuator acts on, directly or by a fixed tendon.
 - `motor_forces`, `length_gains`, `control_ranges`: a compiled model's actuators measured
   at its rest pose (their generalised force per unit control; their length per unit of
@@ -25,26 +27,52 @@ PROBE = 1e-3
 
 
 def kind(gaintype, gainprm, biastype, biasprm, dyntype):
-    """An actuator's kind (KINDS) from its parameters, None for another:
-    - a torque motor (MuJoCo's <motor>): a fixed gain, no bias, no activation dynamics;
+    """An actuator's kind (KINDS) from its parameters, None for another (`why_other`
+    says which term makes it so):
+    - a torque motor (MuJoCo's <motor>, or a <general> whose affine bias is all zeros):
+      a fixed gain, no bias, no activation dynamics;
     - a position servo (<position>, or a <general> of bias -kp * length, any damping):
       its control is the length it holds;
     - a velocity servo (<velocity>: bias -kv * speed, no position term, no activation
       dynamics): its control is the speed it holds."""
+    return _classify(gaintype, gainprm, biastype, biasprm, dyntype)[0]
+
+
+def why_other(gaintype, gainprm, biastype, biasprm, dyntype):
+    """For an actuator of no kind (kind is None), the term that makes it so (gain, bias
+    or dyn) and its value, in a few words; None for one of KINDS."""
+    return _classify(gaintype, gainprm, biastype, biasprm, dyntype)[1]
+
+
+def _classify(gaintype, gainprm, biastype, biasprm, dyntype):
+    """(kind, None) or (None, the reason) of kind and why_other."""
     import mujoco
     if int(gaintype) != int(mujoco.mjtGain.mjGAIN_FIXED):
-        return None
+        return None, f"gain: gaintype {mujoco.mjtGain(int(gaintype)).name[7:].lower()} (not fixed)"
     none = int(dyntype) == int(mujoco.mjtDyn.mjDYN_NONE)
-    if int(biastype) == int(mujoco.mjtBias.mjBIAS_NONE):
-        return KINDS[0] if none else None
-    if int(biastype) != int(mujoco.mjtBias.mjBIAS_AFFINE) or biasprm[0] != 0.0:
-        return None
+    dyn = f"dyn: dyntype {mujoco.mjtDyn(int(dyntype)).name[6:].lower()}"
     gain = gainprm[0]
+    if int(biastype) == int(mujoco.mjtBias.mjBIAS_NONE) or (
+            int(biastype) == int(mujoco.mjtBias.mjBIAS_AFFINE)
+            and biasprm[0] == biasprm[1] == biasprm[2] == 0.0):
+        if gain == 0.0:
+            return None, "gain: 0 (its control moves nothing)"
+        return (KINDS[0], None) if none else (None, f"{dyn} (a torque motor's force would "
+                                                    "lag its control)")
+    if int(biastype) != int(mujoco.mjtBias.mjBIAS_AFFINE):
+        return None, f"bias: biastype {mujoco.mjtBias(int(biastype)).name[7:].lower()}"
+    if biasprm[0] != 0.0:
+        return None, f"bias: a constant term (biasprm[0] = {biasprm[0]:g})"
     if biasprm[1] == -gain != 0.0:
-        return KINDS[1]
-    if none and biasprm[1] == 0.0 and biasprm[2] == -gain != 0.0:
-        return KINDS[2]
-    return None
+        return KINDS[1], None
+    if biasprm[1] != 0.0:
+        return None, (f"bias: its length term (biasprm[1] = {biasprm[1]:g}) is not -gain "
+                      f"({-gain:g}), so its control is no length it holds")
+    if biasprm[2] != -gain or gain == 0.0:
+        return None, (f"bias: its speed term (biasprm[2] = {biasprm[2]:g}) is not -gain "
+                      f"({-gain:g}), so its control is no speed it holds")
+    return (KINDS[2], None) if none else (None, f"{dyn} (a velocity servo's force would "
+                                                "lag its control)")
 
 
 def model_kind(model, a):
@@ -56,6 +84,23 @@ def model_kind(model, a):
 def spec_kind(act):
     """The kind of an MjSpec's actuator."""
     return kind(act.gaintype, act.gainprm, act.biastype, act.biasprm, act.dyntype)
+
+
+def model_why_other(model, a):
+    """why_other of a compiled model's actuator a (an MjModel)."""
+    return why_other(model.actuator_gaintype[a], model.actuator_gainprm[a],
+                     model.actuator_biastype[a], model.actuator_biasprm[a],
+                     model.actuator_dyntype[a])
+
+
+def spec_why_other(act):
+    """why_other of an MjSpec's actuator."""
+    return why_other(act.gaintype, act.gainprm, act.biastype, act.biasprm, act.dyntype)
+
+
+#: What to do about an actuator of no kind (the refusals' advice).
+OTHER_ADVICE = ("drive those joints through actuators that act as torque motors, position "
+                "servos or velocity servos, or through another action kind")
 
 
 def joints_moved(spec, act):
@@ -71,12 +116,15 @@ def joints_moved(spec, act):
     return set()
 
 
-def motor_forces(model, motors, dofs):
+def motor_forces(model, motors, dofs, rest=None):
     """forces[k, j]: motor k's generalised force on dof j per unit of its control, measured
-    on a scratch MjData at the model's rest pose (qfrc_actuator with motor k's control at
-    PROBE and the others 0, less with all 0, over PROBE; control clamping off meanwhile)."""
+    on a scratch MjData at the model's rest pose (rest: a qpos; default qpos0;
+    qfrc_actuator with motor k's control at PROBE and the others 0, less with all 0,
+    over PROBE; control clamping off meanwhile)."""
     import mujoco
     d = mujoco.MjData(model)
+    if rest is not None:
+        d.qpos[:] = rest
     flags = model.opt.disableflags
     model.opt.disableflags = flags | int(mujoco.mjtDisableBit.mjDSBL_CLAMPCTRL)
     try:
@@ -93,25 +141,27 @@ def motor_forces(model, motors, dofs):
     return forces
 
 
-def length_gains(model, qadrs):
+def length_gains(model, qadrs, rest=None):
     """(gain, lengths): gain[a, j] every actuator's length per unit of the joint at qpos
-    address qadrs[j] (central differences at the rest pose, entries under 1e-9 zeroed),
-    and the actuators' lengths at rest. For a joint or a fixed tendon this is the
-    transmission's gear times coefficient, whatever the actuator's kind."""
+    address qadrs[j] (central differences at the rest pose, rest: a qpos, default
+    qpos0; entries under 1e-9 zeroed), and the actuators' lengths at rest. For a joint or
+    a fixed tendon this is the transmission's gear times coefficient, whatever the
+    actuator's kind."""
     import mujoco
+    rest = model.qpos0 if rest is None else rest
     d = mujoco.MjData(model)
     gain = np.zeros((model.nu, len(qadrs)))
     h = 1e-3
     for c, q in enumerate(qadrs):
         lengths = []
         for delta in (h, -h):
-            d.qpos[:] = model.qpos0
+            d.qpos[:] = rest
             d.qpos[q] += delta
             mujoco.mj_fwdPosition(model, d)
             lengths.append(d.actuator_length.copy())
         gain[:, c] = (lengths[0] - lengths[1]) / (2 * h)
     gain[np.abs(gain) < 1e-9] = 0.0
-    d.qpos[:] = model.qpos0
+    d.qpos[:] = rest
     mujoco.mj_fwdPosition(model, d)
     return gain, d.actuator_length.copy()
 

@@ -19,8 +19,9 @@ from dm_control import mujoco as dm_mujoco
 from dm_control.rl import control
 from dm_env import specs
 
-from models import NAMES_TEXT, PREFIX, UNIT, UNIT_NUMERIC, ContractError, contract_names, \
-    room_layout, unit_of
+from models import FRAME_SITE, NAMES_TEXT, PREFIX, UNIT, UNIT_NUMERIC, ContractError, \
+    contract_names, rest_qpos, room_layout, unit_of
+from tasks import placement
 from tasks.config import TaskConfig
 from tasks.kernels import bindings, body, sensing, steps
 from tasks.kernels.stream import TaskStream
@@ -127,20 +128,28 @@ class Physics(dm_mujoco.Physics):
         if not np.array_equal(adr, np.arange(adr[0], adr[0] + len(adr))):
             raise ContractError("rangefinders must be declared one after another")
         self._beams = slice(int(adr[0]), int(adr[0]) + len(adr))
+        #: The robot's rest pose (a qpos): its model's qpos0, or its mount's rest
+        #: (models.rest_qpos); a pose is set from it, the drives read their rest from it.
+        self.rest_qpos = rest_qpos(mjm)
         self._find_base_joints(m)
         # MuJoCo's own arrays, read and written every step without dm_control's wrappers.
         self._mj = (mjm, data.ptr)
         self._qpos, self._qvel = data.ptr.qpos, data.ptr.qvel
         self._ctrl, self._sensordata = data.ptr.ctrl, data.ptr.sensordata
         self._act = data.ptr.act
-        self._xpos, self._xmat = data.ptr.xpos[self._base], data.ptr.xmat[self._base]
+        # The robot's frame: its base's, or the site a mount adds with it (tasks.mount.frame)
+        self._frame = named_id(m, mujoco.mjtObj.mjOBJ_SITE, FRAME_SITE)
+        self._xpos, self._xmat = self.frame_at(data.ptr)
+        self._placement = self._placed(mjm)
         self._body_velocity = np.zeros(6)
         mjm.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
         #: The room's timestep in seconds.
         self.timestep = float(mjm.opt.timestep)
         #: Substeps run so far, for benchmarks against raw mujoco.mj_step.
         self.substeps = 0
-        field, _, goal, self.start = room_layout(m)
+        #: The room's floor (x0, x1, y0, y1) and obstacles (rectangles), in units.
+        self.field, self.obstacles, goal, self.start = room_layout(m)
+        field = self.field
         self.goal_box = (np.array(goal[::2]), np.array(goal[1::2]))
         #: Seconds of simulated time per agent step; set by the task.
         self.step_seconds = 1.0
@@ -155,12 +164,13 @@ class Physics(dm_mujoco.Physics):
             bad_qacc=bindings.warning_count(data.ptr, mujoco.mjtWarning.mjWARN_BADQACC),
             ctrl=self._ctrl, qpos=self._qpos, qvel=self._qvel, act=self._act,
             sensordata=self._sensordata, xpos=self._xpos, xmat=self._xmat,
-            qyaw=-1 if self._qyaw is None or self._own_joints else self._qyaw,
+            qyaw=-1 if self._qyaw is None or self._own_joints or self._placement else self._qyaw,
             free=int(self._free is not None),
             base=int(self._base), beam0=self._beams.start, beam1=self._beams.stop, unit=unit,
             metres_to_units=1.0 / unit, radius=float(self.robot_radius),
             timestep=self.timestep, min_cos_tilt=float(self._min_cos_tilt), x0=float(x0),
-            x1=float(x1), y0=float(y0), y1=float(y1))
+            x1=float(x1), y0=float(y0), y1=float(y1), room_x0=float(field[0]),
+            room_x1=float(field[1]), room_y0=float(field[2]), room_y1=float(field[3]))
         #: The drive's own parts of its record (each drive's Physics fills them), by name.
         self.parts = {}
         #: The drive's record (Record), built at each episode's start (set_drive).
@@ -184,37 +194,31 @@ class Physics(dm_mujoco.Physics):
         return self.record
 
     def _find_base_joints(self, m):
-        """The base's joints: one free joint, or slide x and slide y (and hinge yaw)."""
-        joints = [j for j in range(m.njnt) if m.jnt_bodyid[j] == self._base]
-        kinds = [int(m.jnt_type[j]) for j in joints]
-        self._free = self._qx = self._qy = self._qyaw = None
-        self._own_joints = False
+        """The base's joints (tasks.placement.base_joints): one free joint, or slide x and
+        slide y (and a hinge about z or -z), besides any of its own."""
+        self._joints = found = placement.base_joints(m.ptr, self._base, self.rest_qpos)
         #: The base's free joint's first dof (x, then y), None for a planar base.
-        self.free_dof = None
+        self.free_dof = found.free_dof
         #: The base's planar joints by role ("x", "y", "yaw"), as joint ids.
-        self.base_joints = {}
-        if kinds == [mujoco.mjtJoint.mjJNT_FREE]:
-            self._free = int(m.jnt_qposadr[joints[0]])
-            self.free_dof = int(m.jnt_dofadr[joints[0]])
-            self._rest_height = float(m.qpos0[self._free + 2])
-            return
-        for j, kind in zip(joints, kinds):
-            axis = tuple(np.round(m.jnt_axis[j], 12))
-            if kind == mujoco.mjtJoint.mjJNT_SLIDE and axis == (1, 0, 0):
-                self.base_joints["x"] = j
-            elif kind == mujoco.mjtJoint.mjJNT_SLIDE and axis == (0, 1, 0):
-                self.base_joints["y"] = j
-            elif kind == mujoco.mjtJoint.mjJNT_HINGE and axis == (0, 0, 1):
-                self.base_joints["yaw"] = j
-        adr = {role: int(m.jnt_qposadr[j]) for role, j in self.base_joints.items()}
-        self._qx, self._qy, self._qyaw = adr.get("x"), adr.get("y"), adr.get("yaw")
-        # Joints of its own beside its planar ones (a mount's root slides added beside
-        # them): its heading is then read from its frame, as for a free joint, and a pose
-        # is set from the file's rest.
-        self._own_joints = len(joints) > len(self.base_joints)
-        if self._qx is None or self._qy is None:
-            raise ContractError("the base body needs a free joint, or slide joints along "
-                                "x and y (and optionally a hinge about z)")
+        self.base_joints = found.roles
+        #: The sense of the base's yaw hinge: 1 about z, -1 about -z.
+        self.yaw_sign = found.yaw_sign
+        self._free, self._rest_height, self._own_joints = found.free_q, found.rest_height, found.own
+        self._qx, self._qy, self._qyaw = found.qx, found.qy, found.qyaw
+
+    def frame_at(self, d):
+        """(position, rotation): the robot's frame's rows of an MjData d of the model (its
+        xpos and row-major xmat: the base's, or the frame site's)."""
+        if self._frame >= 0:
+            return d.site_xpos[self._frame], d.site_xmat[self._frame]
+        return d.xpos[self._base], d.xmat[self._base]
+
+    def _placed(self, mjm):
+        """The robot's Placement, None where its pose is set the plain way."""
+        if placement.Placement.plain(mjm, self.frame_at, self._joints, self._frame >= 0,
+                                     self.rest_qpos):
+            return None
+        return placement.Placement(mjm, self.frame_at, self._joints, self.rest_qpos)
 
     # -- read-outs ---------------------------------------------------------
     def robot_pose(self):
@@ -270,12 +274,17 @@ class Physics(dm_mujoco.Physics):
             self.raise_for(status)
 
     def raise_for(self, status):
-        """The PhysicsError of a kernel's status (tasks.kernels.bindings: UNSTABLE, TIPPED)."""
+        """The PhysicsError of a kernel's status (tasks.kernels.bindings: UNSTABLE, TIPPED,
+        OUTSIDE)."""
         t = self._mj[1].time
         if status == bindings.NOT_FINITE:
             raise ValueError("action must be finite")
         if status == bindings.UNSTABLE:
             raise control.PhysicsError(f"unstable simulation at t={t:.3f} s")
+        if status == bindings.OUTSIDE:
+            x, y, _ = self.robot_pose()
+            raise control.PhysicsError(f"the robot left the room at t={t:.3f} s (at "
+                                       f"({x:.1f}, {y:.1f}) units, off its floor)")
         raise control.PhysicsError(f"the robot tipped over at t={t:.3f} s "
                                    f"(tilt {math.degrees(self.tilt()):.0f} degrees)")
 
@@ -284,17 +293,20 @@ class Physics(dm_mujoco.Physics):
     # -- setters -----------------------------------------------------------
     def set_robot_pose(self, x, y, heading=0.0):
         """Places the robot at (x, y, heading), in units and radians, at rest; a free-joint
-        robot upright at the height its file gives it, every other joint at its rest."""
+        robot upright at the height its file gives it, every other joint at its rest; a
+        robot whose frame in its file is not the plain one, by its tasks.placement.Placement."""
         q = self._qpos
-        if self._free is not None:
+        if self._placement is not None:   # a frame of its own in its file
+            self._placement.place(self._mj[1], x * self.unit, y * self.unit, heading)
+        elif self._free is not None:
             model, _ = self._mj
-            q[:] = model.qpos0
+            q[:] = self.rest_qpos
             a = self._free
             q[a: a + 3] = x * self.unit, y * self.unit, self._rest_height
             q[a + 3: a + 7] = math.cos(heading / 2), 0.0, 0.0, math.sin(heading / 2)
         else:
             if self._own_joints:
-                q[:] = self._mj[0].qpos0
+                q[:] = self.rest_qpos
             q[self._qx], q[self._qy] = x * self.unit, y * self.unit
             if self._qyaw is not None:
                 q[self._qyaw] = heading

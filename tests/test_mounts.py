@@ -22,6 +22,7 @@ SOURCES = {
     "car": lambda: ROOT / "models" / "vendor" / "mujoco_car" / "car.xml",
     "ant": lambda: importlib.resources.files("dm_control") / "third_party/ant/ant.xml",
     "quadruped": lambda: importlib.resources.files("dm_control") / "suite/quadruped.xml",
+    "gym_ant": lambda: importlib.resources.files("gymnasium") / "envs/mujoco/assets/ant.xml",
 }
 #: model/car/car.xml's git blob in google-deepmind/mujoco (last changed upstream in a276c49).
 CAR_BLOB = "0ab791f05ad6b022e573a7bb13af6aa0efdddc1d"
@@ -274,17 +275,19 @@ def test_the_fused_loop_takes_every_shipped_mount():
             env.close()
 
 
-def test_the_ant_walks_the_two_wheel_actions_within_its_stated_limits():
+@pytest.mark.parametrize("ant", ["ant", "gym_ant"])
+def test_the_ant_walks_the_two_wheel_actions_within_its_stated_limits(ant):
     """The gait drive (tasks/realisations/gait.py) over 60 random free-space actions: the turn and the
     move errors within the limits the ant's mount states, and no fall in 200 random
-    actions that ram the walls."""
+    actions that ram the walls; dm_control's Ant, and Gymnasium's from its mount's rest
+    (its init_qpos: the file's qpos0 has its ankles outside their ranges)."""
     from experiments.checks import robotcheck
-    errors, limits = robotcheck.accuracy("ant", 60, seed=1)
+    errors, limits = robotcheck.accuracy(ant, 60, seed=1)
     assert limits == {"turn": 0.08, "move": 0.12}
     for key, e in errors.items():
         assert e.max() <= limits[key], (key, e.max())
     assert np.median(errors["turn"]) < 0.03 and np.median(errors["move"]) < 0.06
-    r = robotcheck.fuzz("ant", 200, seed=3)
+    r = robotcheck.fuzz(ant, 200, seed=3)
     assert r["falls"] == 0 and r["nan_steps"] == 0 and r["warnings"] == 0
 
 
@@ -353,7 +356,7 @@ def test_an_installed_copy_finds_the_shipped_mounts_and_behaviours_by_name(tmp_p
                     str(target), str(source)], check=True, capture_output=True)
     code = ("import tasks, ebrl.behaviour as b\n"
             "assert tasks.__file__.startswith(%r)\n"
-            "assert sorted(tasks.MOUNTS) == ['ant', 'car', 'point', 'point_mass', 'quadruped']\n"
+            "assert sorted(tasks.MOUNTS) == ['ant', 'car', 'gym_ant', 'point', 'point_mass', 'quadruped']\n"
             "assert tasks.resolve('car').model.is_relative_to(%r)\n"
             # the vendored car compiled in the room (its meshes and textures found); a step
             # would only compile the kernels again in the copy (test_car_* step it here)

@@ -129,7 +129,7 @@ def _base(name):
     return data
 
 
-BASES = {name: _base(name) for name in ("ant", "point_mass", "car")}
+BASES = {name: _base(name) for name in ("ant", "point_mass", "car", "gym_ant")}
 SCALARS = (st.none() | st.booleans() | st.integers(-2**70, 2**70)
            | st.floats(allow_nan=True, allow_infinity=True)
            | st.text(st.characters(blacklist_categories=("Cs",)), max_size=12)
@@ -170,7 +170,8 @@ def mounts(draw):
             table[key] = draw(VALUES)
         else:
             table[draw(st.sampled_from(["colour", "kp", "readings", "gait", "unit",
-                                        "control_substeps", "radius", "bump"]))] = draw(VALUES)
+                                        "control_substeps", "radius", "bump", "forward",
+                                        "rest"]))] = draw(VALUES)
     return _document(data)
 
 

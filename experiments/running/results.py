@@ -125,6 +125,10 @@ FAILURE_KINDS = (
      "the robot file is bad (the error says where): fix it, then RERUN"),
     ("memory", lambda e: e.split(":")[0].endswith("MemoryError"),  # numpy's _ArrayMemoryError
      "out of memory: RERUN with fewer --workers"),
+    ("left the room", lambda e: e.startswith("PhysicsError: the robot left the room"),
+     "the robot went through a wall and off the room's floor, which a rerun repeats (same "
+     "seed, same computation): its contacts with the walls are too soft or its steps too "
+     "long for its speed (`ebrl check` measures how deep it goes into a wall)"),
     ("raised", lambda e: True,
      "a rerun raises the same again (same seed, same result): each run.json holds its "
      "traceback"),

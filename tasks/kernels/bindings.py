@@ -69,8 +69,9 @@ mj_objectVelocity = types.ExternalFunction(
     "mj_objectVelocity", types.void(_P, _P, types.intc, types.intc, _P, types.intc))
 
 #: A kernel's status: the step ran; MuJoCo flagged an unstable state (mjWARN_BADQACC);
-#: a free-joint robot tilted past navigation.MAX_TILT_DEGREES; the action is not finite.
-OK, UNSTABLE, TIPPED, NOT_FINITE = 0, 1, 2, 3
+#: a free-joint robot tilted past navigation.MAX_TILT_DEGREES; the action is not finite;
+#: the robot's centre left the room's floor (tasks.kernels.steps.step).
+OK, UNSTABLE, TIPPED, NOT_FINITE, OUTSIDE = 0, 1, 2, 3, 4
 
 OBJ_BODY = int(mujoco.mjtObj.mjOBJ_BODY)
 SENSOR_BIT = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)

@@ -26,8 +26,9 @@ BODY_FIELDS = (
     "qyaw", "free", "base", "beam0", "beam1", "unit", "metres_to_units", "radius", "timestep",
     "min_cos_tilt",
     # the goal square (units) and Section 3.2's code (255; -255 / sensor range), Section
-    # 3.3's action noise
-    "x0", "x1", "y0", "y1", "levels", "per_unit", "action_noise")
+    # 3.3's action noise, the room's floor (units: a centre off it has left the room)
+    "x0", "x1", "y0", "y1", "levels", "per_unit", "action_noise", "room_x0", "room_x1",
+    "room_y0", "room_y1")
 
 
 @njit(cache=True)
@@ -53,6 +54,14 @@ def goal_reached(s):
     """True when the robot's centre is in the goal square (Section 3.1)."""
     x, y, _ = base_pose(s)
     return in_box(x, y, s.x0, s.x1, s.y0, s.y1)
+
+
+@njit(cache=True)
+def in_room(s):
+    """True while the robot's centre is on the room's floor (a robot outside it went
+    through a wall: never in a run that is right)."""
+    x, y, _ = base_pose(s)
+    return in_box(x, y, s.room_x0, s.room_x1, s.room_y0, s.room_y1)
 
 
 @njit(cache=True)

@@ -25,11 +25,12 @@ from tasks.kernels import two_wheel as family
     # per listed joint (tasks.realisations.gait.GaitPhysics: each leg's swing, lift and held joints):
     # its leg, its role (SWING, LIFT, HELD), the sign that raises the foot (a lift
     # joint's), its qpos and dof addresses and rest angle; its torque motor (-1: none)
-    # and that motor's control range; per leg: the swing's forward and turning shares,
+    # and that motor's control range and sense (1, or -1 for a motor whose force
+    # opposes its control: a negative gear or gain); per leg: the swing's forward and turning shares,
     # the phase offset (cycles); the position servos: their actuators, their controls'
     # change per radian of each listed joint (servos x joints), their controls at rest
     # and ranges
-    "leg", "role", "lift_sign", "q", "dq", "rest", "acts", "ctrl_lo", "ctrl_hi",
+    "leg", "role", "lift_sign", "q", "dq", "rest", "acts", "ctrl_lo", "ctrl_hi", "motor_sign",
     "forward_share", "turn_share", "offset", "servos", "servo_gain", "servo_rest",
     "servo_lo", "servo_hi",
     # the gait's parameters (tasks.realisations.gait.PARAMETERS): PD gains, seconds per control tick,
@@ -93,7 +94,7 @@ def walk(s, n, amp, lift, freq):
                 target[j] = rest[j]
         for j in range(joints):
             if s.acts[j] >= 0:
-                u = kp * (target[j] - qpos[s.q[j]]) - kd * qvel[s.dq[j]]
+                u = (kp * (target[j] - qpos[s.q[j]]) - kd * qvel[s.dq[j]]) * s.motor_sign[j]
                 s.ctrl[s.acts[j]] = min(max(u, s.ctrl_lo[j]), s.ctrl_hi[j])
         for a in range(len(s.servos)):
             u = s.servo_rest[a]
@@ -132,7 +133,8 @@ def hold(s):
 
 @njit(cache=True)
 def heading(s):
-    """The base's heading: its frame's x axis in the plane."""
+    """The robot's heading: its frame's x axis in the plane (the base's, or the frame a
+    mount adds: tasks.mount.frame)."""
     return math.atan2(s.xmat[3], s.xmat[0])
 
 

@@ -11,9 +11,12 @@ from tasks.kernels import bindings, two_wheel as family
 from tasks.kernels.body import BODY_FIELDS, step_phase
 
 
-@records.record(*BODY_FIELDS, *family.FAMILY_FIELDS, "forward_actuator", "turn_actuator")
+@records.record(*BODY_FIELDS, *family.FAMILY_FIELDS, "forward_actuator", "turn_actuator",
+                "turn_sign")
 class ServosRecord(records.Record):
-    """The servos' record: the body, the family's fields, the two servos' ids."""
+    """The servos' record: the body, the family's fields, the two servos' ids, the turn
+    servo's sense (1: its control turns the base counter-clockwise; -1: a servo on a
+    hinge about -z, or of a negative gear)."""
 
 
 ServosRecord.constructor = njit(cache=True)(lambda *values: ServosRecord(*values))
@@ -23,7 +26,7 @@ ServosRecord.constructor = njit(cache=True)(lambda *values: ServosRecord(*values
 def drive(s, speed, yaw_rate):
     """Servo targets: speed in units/s along the heading, yaw rate in rad/s."""
     s.ctrl[s.forward_actuator] = speed * s.unit
-    s.ctrl[s.turn_actuator] = yaw_rate
+    s.ctrl[s.turn_actuator] = yaw_rate * s.turn_sign
 
 
 @njit(cache=True)

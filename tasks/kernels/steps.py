@@ -2,7 +2,8 @@
 loop call, and the one table that says which kernels each realisation runs.
 
 An agent step (`step`), read top to bottom: the action checked and clipped
-(body.clip_unit); the realisation's action (`action`: REALISATIONS below); the goal test
+(body.clip_unit); the realisation's action (`action`: REALISATIONS below); the robot
+still in the room (body.in_room: else the status OUTSIDE, a failed run); the goal test
 (body.goal_reached); the observation (`observe`: Section 3.2's range codes and, for a
 drive that senses it, the velocity). Everything that runs it runs this one function: the
 dm_env hooks (tasks.navigation.Navigation, a step's work in before_step, its results read
@@ -145,6 +146,8 @@ def step(s, a, u, noise, velocity_noise, codes, vel):
     status, n = action(s, a, u)
     if status != bindings.OK:
         return status, n, False
+    if not body.in_room(s):
+        return bindings.OUTSIDE, n, False
     goal = body.goal_reached(s)
     observe(s, noise, velocity_noise, codes, vel)
     return bindings.OK, n, goal

@@ -15,7 +15,11 @@ tasks.navigation reads, so a mounted model is as self-describing as a contract f
     file = "gymnasium:envs/mujoco/assets/point.xml"
     drive = "two_wheel"                 # a key of ACTIONS (tasks.robots.DRIVES)
     unit = 0.3333333333333333           # metres per paper unit (default 0.1)
-    base = "torso"                      # the body whose frame is the robot's pose
+    base = "torso"                      # the body whose frame is the robot's pose (turned
+                                        # or moved in its file: placed all the same)
+    forward = "x"                       # the base's axis it faces (x, y, z, -x, -y, -z)
+    rest = "a keyframe"                 # or [rest] joint = value: its rest pose (rad, m),
+                                        # checked against the joints' ranges
     joints = "file"                     # "file" (the base's own), "free", "planar",
                                         # "slides", "slides_z" (added beside the base's own)
     drop = ["world", "lights", "skybox", "actuators"]
@@ -37,7 +41,9 @@ Every error is one line, ``<mount file>: <field>: <what is wrong>`` (MountError)
 The package: `fields` (the one-line checks), `records` (Mount, Bumper, Beams, the Action
 base), `kinds` (one Action class per action kind, registered by name: its fields, its
 edit of the spec, its realisation: tasks.realisations), `parsing` (the TOML file to a Mount),
-`spec` (the Mount to the robot's MjSpec).
+`frame` (the file's own frame and rest: the base's rotation in its file, the robot's
+frame by its forward axis, the rest pose checked against the ranges), `spec` (the Mount
+to the robot's MjSpec).
 """
 from tasks.mount.fields import MountError
 from tasks.mount.kinds import KINDS

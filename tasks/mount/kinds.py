@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from tasks.actuators import joints_moved, spec_kind
+from tasks.actuators import OTHER_ADVICE, joints_moved, spec_kind, spec_why_other
 from tasks.mount.fields import fail
 from tasks.mount.records import Action
 from tasks.mount.spec import actuator, file_actuator
@@ -45,7 +45,12 @@ class Servos(Action):
 
     def edit(self, mount, spec, base, names):
         import mujoco
-        base.add_site(name="drive")
+
+        from tasks.mount.frame import base_frame
+        site = base.add_site(name="drive")
+        frame = base_frame(mount)
+        if frame.robot is not None:   # its x the robot's forward, its y the robot's left
+            site.quat = list(frame.robot_quat())
         actuator(spec, "forward", mujoco.mjtTrn.mjTRN_SITE, "drive",
                        [1, 0, 0, 0, 0, 0]).set_to_velocity(kv=1)
         actuator(spec, "grip", mujoco.mjtTrn.mjTRN_SITE, "drive",
@@ -55,10 +60,18 @@ class Servos(Action):
 
 
 def _yaw_joint(mount, base):
+    """The base's hinge about the vertical (z or -z in the world of its file: the
+    realisation reads which way it turns)."""
     import mujoco
+    import numpy as np
+
+    from tasks.mount.frame import base_frame
+    rotation = base_frame(mount).rotation
     for j in base.joints:
-        if j.type == mujoco.mjtJoint.mjJNT_HINGE and tuple(j.axis) == (0, 0, 1):
-            return j.name
+        if j.type == mujoco.mjtJoint.mjJNT_HINGE:
+            axis = rotation @ np.asarray(j.axis, dtype=float)
+            if abs(abs(axis[2]) - np.linalg.norm(axis)) <= 1e-9 * np.linalg.norm(axis):
+                return j.name
     fail(mount.path, "action.kind", f"servos turn a hinge about z on {mount.base!r}; it has "
                                     "none (joints = \"planar\" adds one)")
 
@@ -78,11 +91,17 @@ class Thrusters(Action):
 
 
 def _slides(mount, base):
+    """The base's slides along the room's x and y (their axes in the world of its file)."""
     import mujoco
+    import numpy as np
+
+    from tasks.mount.frame import base_frame
+    rotation = base_frame(mount).rotation
     out = {}
     for j in base.joints:
         if j.type == mujoco.mjtJoint.mjJNT_SLIDE:
-            out[tuple(j.axis)] = j.name
+            axis = rotation @ np.asarray(j.axis, dtype=float)
+            out[tuple(float(v) for v in np.round(axis / np.linalg.norm(axis), 9))] = j.name
     if (1, 0, 0) not in out or (0, 1, 0) not in out:
         fail(mount.path, "action.kind", f"thrusters push slides along x and y on {mount.base!r}; "
                                         "it has none (joints = \"planar\" adds them)")
@@ -320,11 +339,17 @@ class JointMotors(Action):
             if not any(name in joints_moved(spec, a) for a in on):
                 fail(mount.path, f"action.{role}", f"no actuator of {mount.model.name} moves "
                                                    f"joint {name!r}")
+        other = next((a for a in on if spec_kind(a) is None), None)
+        if other is not None:
+            fail(mount.path, "action.kind", f"joint_motors need the joints' actuators to act as "
+                                            f"torque motors, position servos or velocity servos; "
+                                            f"{other.name!r} is none: {spec_why_other(other)}: "
+                                            f"{OTHER_ADVICE}")
         kind = {spec_kind(a) for a in on}
-        if len(kind) != 1 or None in kind:
+        if len(kind) != 1:
             fail(mount.path, "action.kind", "joint_motors need the joints' actuators all torque "
                                             "motors, position servos or velocity servos; got "
-                                            + ", ".join(f"{a.name!r}: {spec_kind(a) or 'other'}" for a in on))
+                                            + ", ".join(f"{a.name!r}: {spec_kind(a)}" for a in on))
         kind = kind.pop()
         need = {"torque motors": ("kp", "kv"), "velocity servos": ("kp",), "position servos": ()}[kind]
         for k in ("kp", "kv"):
@@ -428,6 +453,9 @@ class Gait(Action):
                     if key != "yaw" and name not in moved:
                         fail(mount.path, field, f"no actuator of {mount.model.name} moves "
                                                 f"joint {name!r}")
+        from tasks.mount.frame import check_rests
+        check_rests(mount, [name for swing, lifts, held in self.legs
+                            for name in (swing, *lifts, *held)])
 
     def physics_attributes(self):
         from tasks.realisations import gait

@@ -7,6 +7,7 @@ import pathlib
 
 from ebrl.readings import Range
 from tasks.mount.fields import Fields, MountError, read
+from tasks.mount.frame import FORWARDS
 from tasks.mount.kinds import KINDS
 from tasks.mount.records import Action, Beams, Bumper, Mount
 from tasks.mount.spec import BEAMS
@@ -34,7 +35,7 @@ TIME_SCALE = Range(float, 0.0, 1000.0, low_open=True)
 
 _TOP = {"name", "description", "file", "drive", "unit", "base", "joints", "drop",
         "drop_geoms", "drop_bodies", "keep_options", "timestep", "integrator", "time_scale",
-        "condim",
+        "condim", "forward", "rest",
         "bumper", "beams", "action", "readings", "check"}
 _BUMPER = {"geom", "shape", "radius", "height", "half_length"}
 _BEAMS = {"height", "sensors"}
@@ -83,6 +84,7 @@ def parse(path: str | pathlib.Path) -> Mount:
                  timestep=ranged(data, "timestep", "timestep", TIMESTEP), integrator=integrator,
                  time_scale=ranged(data, "time_scale", "time_scale", TIME_SCALE, 1.0),
                  condim=_parse_condim(fields, data, joints),
+                 forward=_parse_forward(fields, data, drive), rest=_parse_rest(fields, data),
                  readings=readings, check=check,
                  description=_description(fields, data))
 
@@ -220,3 +222,32 @@ def _parse_condim(fields, data, joints):
         fields.fail("condim", f"joints = {joints}: its geoms touch nothing (condim is for "
                               "a robot that stands on the floor)")
     return int(v)
+
+
+def _parse_forward(fields, data, drive):
+    """The forward field: the base's axis the robot moves along (FORWARDS; default x)."""
+    v = data.get("forward", "x")
+    if not isinstance(v, str) or v not in FORWARDS:
+        fields.fail("forward", f"must be one of {', '.join(FORWARDS)}, got {v!r}")
+    if v != "x" and drive != "two_wheel":
+        fields.fail("forward", f"the {drive} drive has no forward axis (its beams and "
+                               "thrusts follow the room's axes)")
+    return v
+
+
+def _parse_rest(fields, data):
+    """The rest field: a keyframe's name of the file, or a table of joint = value (rad
+    for a hinge, m for a slide); None: the file's qpos0 (tasks.mount.frame.rest_values
+    checks it against the file)."""
+    if "rest" not in data:
+        return None
+    v = data["rest"]
+    if isinstance(v, str):
+        if not v:
+            fields.fail("rest", "must be a keyframe's name or a table of joint = value")
+        return v
+    if not isinstance(v, dict) or not v:
+        fields.fail("rest", "must be a keyframe's name or a table of joint = value")
+    for name in v:
+        fields.number(v, name, f"rest.{name}", positive=False)
+    return tuple(sorted((name, float(value)) for name, value in v.items()))

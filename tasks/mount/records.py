@@ -103,6 +103,12 @@ class Mount:
     #: The robot's geoms' condim (their contact with the floor and walls), None: the
     #: file's. The room's floor is condim 1 (frictionless unless a geom asks for more).
     condim: int | None = None
+    #: The base's axis the robot moves along ("x", "y", "z", "-x", "-y", "-z"; its
+    #: frame's x by default): the heading, the beams and the servos follow it.
+    forward: str = "x"
+    #: The rest pose: a keyframe of the file by name, or (joint, value) pairs (rad, m);
+    #: None: the file's qpos0 (tasks.mount.frame).
+    rest: str | tuple[tuple[str, float], ...] | None = None
     #: The [readings] table as sorted (field, value) pairs (Robot.readings).
     readings: tuple[tuple[str, object], ...] = ()
     description: str = ""

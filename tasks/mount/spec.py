@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 
+from tasks.mount import frame as frames
 from tasks.mount.fields import fail
 from tasks.mount.records import Mount
 
@@ -18,21 +19,56 @@ def robot_spec(mount: Mount):
     """The robot file's MjSpec, edited as the mount says (the file itself is untouched)."""
     import models
     spec, base = _load(mount)
+    frame = frames.base_frame(mount)
     names = {}
     if mount.base != "base":
         names["base"] = mount.base
     planar = (mount.joints in ("planar", "slides")
               or (mount.joints == "file" and not _has_free(base)))
     beam_names = _drop(mount, spec, names)
-    _root_joints(mount, spec, base)
-    _bumper(mount, spec, base, planar, names)
-    _beams(mount, spec, base, beam_names)
+    _root_joints(mount, spec, base, frame)
+    _bumper(mount, spec, base, planar, names, frame)
+    _beams(mount, spec, base, beam_names, frame)
+    _robot_frame(mount, spec, base, frame)
     mount.action.edit(mount, spec, base, names)
     _options(mount, spec)
+    _rest(mount, spec)
     if names:
         spec.add_text(name=models.NAMES_TEXT,
                       data=" ".join(f"{k}={v}" for k, v in sorted(names.items())))
     return spec
+
+
+def _robot_frame(mount, spec, base, frame):
+    """The site FRAME_SITE on the base with the robot's frame (x forward, z up), where it
+    is not the base's own (tasks.navigation reads the pose from it)."""
+    import models
+    if frame.robot is None:
+        return
+    if spec.site(frames.FRAME_SITE) is not None:
+        fail(mount.path, "forward", f"{mount.model} has a site named {frames.FRAME_SITE!r}, the "
+                                    "name of the robot's frame a mount adds")
+    base.add_site(name=frames.FRAME_SITE, pos=[0, 0, 0], quat=list(frame.robot_quat()),
+                  group=5, size=[0.01 * mount.unit / models.UNIT, 0, 0])
+
+
+def _rest(mount, spec):
+    """The rest pose (tasks.mount.frame.rest_values) of the joints the robot keeps, in the
+    model's text element models.REST_TEXT (models.rest_qpos reads it)."""
+    import models
+    kept = []
+    for name, value in frames.rest_values(mount):
+        if spec.joint(name) is None:
+            if isinstance(mount.rest, str):
+                continue   # a keyframe's joint the mount replaces (its root joints)
+            fail(mount.path, f"rest.{name}", f"joint {name!r} is not kept (the mount's "
+                                             f"joints = {mount.joints!r} replace it)")
+        if any(ch.isspace() or ch == "=" for ch in name):
+            fail(mount.path, f"rest.{name}", f"{name!r}: a joint's name with spaces or '=' "
+                                             "cannot be recorded")
+        kept.append(f"{name}={value!r}")
+    if kept:
+        spec.add_text(name=models.REST_TEXT, data=" ".join(kept))
 
 
 def _load(mount):
@@ -95,24 +131,25 @@ def _drop_sensors(mount, spec, drop):
     return beam_names
 
 
-def _root_joints(mount, spec, base):
+def _root_joints(mount, spec, base, frame):
     """The base's joints: slides x, y (and hinge yaw) in place of its own for "planar",
-    a free joint added for "free"."""
+    a free joint added for "free". Added slides and hinges follow the room's axes
+    whatever the base's rotation in its file (frame: tasks.mount.frame.BaseFrame)."""
     import mujoco
     if mount.joints == "planar":
         for joint in list(base.joints):
             spec.delete(joint)
-        plain_joint(base, "x", mujoco.mjtJoint.mjJNT_SLIDE, [1, 0, 0])
-        plain_joint(base, "y", mujoco.mjtJoint.mjJNT_SLIDE, [0, 1, 0])
+        plain_joint(base, "x", mujoco.mjtJoint.mjJNT_SLIDE, frame.world_axis(0))
+        plain_joint(base, "y", mujoco.mjtJoint.mjJNT_SLIDE, frame.world_axis(1))
         if mount.drive == "two_wheel":
-            plain_joint(base, "yaw", mujoco.mjtJoint.mjJNT_HINGE, [0, 0, 1])
+            plain_joint(base, "yaw", mujoco.mjtJoint.mjJNT_HINGE, frame.world_axis(2))
     elif mount.joints == "free":
         if list(base.joints):
             fail(mount.path, "joints", f"body {mount.base!r} has joints of its own: joints = "
                                        "\"file\", or \"slides\" to add slides beside them")
         base.add_freejoint(name="root")
     elif mount.joints in ("slides", "slides_z"):
-        _slides_beside(mount, spec, base)
+        _slides_beside(mount, spec, base, frame)
 
 
 #: A joint's fields an MjSpec copy keeps (every field of MjsJoint but its identity).
@@ -122,7 +159,7 @@ JOINT_FIELDS = ("type", "name", "pos", "axis", "ref", "align", "stiffness", "spr
                 "frictionloss", "solref_friction", "solimp_friction", "group", "userdata")
 
 
-def _slides_beside(mount, spec, base):
+def _slides_beside(mount, spec, base, frame):
     """Slides x and y (and z, for "slides_z": a base resting on the floor by gravity)
     added at the base before its own joints, which are kept with every motor, tendon and
     equality on them (MuJoCo applies a body's joints in order: the slides first move the
@@ -138,9 +175,8 @@ def _slides_beside(mount, spec, base):
     kept = [{f: getattr(j, f) for f in JOINT_FIELDS} for j in own]
     for j in own:
         spec.delete(j)
-    axes = {"x": [1, 0, 0], "y": [0, 1, 0], "z": [0, 0, 1]}
-    for name in ("x", "y", "z") if mount.joints == "slides_z" else ("x", "y"):
-        plain_joint(base, name, mujoco.mjtJoint.mjJNT_SLIDE, axes[name])
+    for i, name in enumerate(("x", "y", "z") if mount.joints == "slides_z" else ("x", "y")):
+        plain_joint(base, name, mujoco.mjtJoint.mjJNT_SLIDE, frame.world_axis(i))
     for fields in kept:
         base.add_joint(**fields)
 
@@ -148,7 +184,7 @@ def _slides_beside(mount, spec, base):
 # The room's contact bits (models/__init__.py): the bumper 2 / 1 touches walls only;
 # a planar robot's other geoms touch nothing; a free robot's touch the walls and the
 # floor (0 / 5), never the bumper or each other.
-def _bumper(mount, spec, base, planar, names):
+def _bumper(mount, spec, base, planar, names, frame):
     """The bumper (the file's geom, or a shape added) and the room's contact bits."""
     geom = mount.bumper.geom
     hull = _file_bumper(mount, spec, names) if geom is not None else None
@@ -162,7 +198,7 @@ def _bumper(mount, spec, base, planar, names):
                 if mount.condim is not None:
                     g.condim = mount.condim
     if hull is None:
-        hull = _added_bumper(mount, base, planar)
+        hull = _added_bumper(mount, base, planar, frame)
     if not contract:
         hull.contype, hull.conaffinity, hull.condim = 2, 1, 1
         hull.solref = [0.02, 1]
@@ -188,24 +224,27 @@ def _file_bumper(mount, spec, names):
     return hull
 
 
-def _added_bumper(mount, base, planar):
-    """The bumper's shape added to the base as the geom hull (massless on a free base)."""
+def _added_bumper(mount, base, planar, frame):
+    """The bumper's shape added to the base as the geom hull (massless on a free base),
+    upright in the robot's frame."""
     import mujoco
     bumper = mount.bumper
-    hull = base.add_geom(name="hull", pos=[0, 0, bumper.height], group=3,
+    hull = base.add_geom(name="hull", pos=frame.in_base([0, 0, bumper.height]), group=3,
                          type=(mujoco.mjtGeom.mjGEOM_SPHERE if bumper.shape == "sphere"
                                else mujoco.mjtGeom.mjGEOM_CAPSULE),
                          size=[bumper.radius, bumper.half_length, 0], mass=0 if not planar else 1,
                          rgba=[0.2, 0.35, 0.8, 0.15])
+    if frame.robot is not None:
+        hull.quat = list(frame.robot_quat())
     if not planar:
         hull.mass = 0.0
         hull.density = 0.0
     return hull
 
 
-def _beams(mount, spec, base, beam_names):
-    """The drive's beams added to the base, or the file's rangefinders in the mount's
-    order."""
+def _beams(mount, spec, base, beam_names, frame):
+    """The drive's beams added to the base (in the robot's frame), or the file's
+    rangefinders in the mount's order."""
     import mujoco
 
     import models
@@ -213,8 +252,9 @@ def _beams(mount, spec, base, beam_names):
         count, first, step = BEAMS[mount.drive]
         for i in range(count):
             angle = math.radians(first + i * step)
-            site = base.add_site(name=f"range_{i}", pos=[0, 0, mount.beams.height],
-                                 zaxis=[math.cos(angle), math.sin(angle), 0], group=4,
+            site = base.add_site(name=f"range_{i}", pos=frame.in_base([0, 0, mount.beams.height]),
+                                 zaxis=frame.in_base([math.cos(angle), math.sin(angle), 0]),
+                                 group=4,
                                  size=[0.01 * mount.unit / models.UNIT, 0, 0],
                                  rgba=[1, 0.2, 0.2, 1])
             _rangefinder(spec, f"range_{i}", site.name)

@@ -48,8 +48,10 @@ import numpy as np
 
 from ebrl.readings import Range
 from tasks import navigation
-from tasks.actuators import control_ranges, length_gains, model_kind
+from tasks.actuators import OTHER_ADVICE, control_ranges, length_gains, model_kind, \
+    model_why_other
 from tasks.kernels.gait import GaitRecord
+from tasks.mount.frame import rest_data
 from tasks.two_wheel import TwoWheel
 
 #: The gait's parameters (a mount's [action.gait] may set any of them) and defaults.
@@ -125,6 +127,7 @@ class GaitPhysics(navigation.Physics):
         self.parts.update(
             leg=self._leg, role=self._role, lift_sign=self._lift_sign, q=self._q, dq=self._dq,
             rest=self._rest, acts=self._acts, ctrl_lo=self._ctrl_lo, ctrl_hi=self._ctrl_hi,
+            motor_sign=self._motor_sign,
             forward_share=self._forward_share, turn_share=self._turn_share, offset=self._offset,
             servos=self._servos, servo_gain=self._servo_gain, servo_rest=self._servo_rest,
             servo_lo=self._servo_lo, servo_hi=self._servo_hi,
@@ -161,10 +164,16 @@ class GaitPhysics(navigation.Physics):
         self._role = np.array(role, dtype=np.int64)
         self._q = mjm.jnt_qposadr[self._joints].astype(np.int64)
         self._dq = mjm.jnt_dofadr[self._joints].astype(np.int64)
-        self._rest = mjm.qpos0[self._q].copy()
+        self._rest = self.rest_qpos[self._q].copy()
         # what moves each listed joint: the actuators' lengths' change per radian of it
-        gain, lengths = length_gains(mjm, self._q)
+        gain, lengths = length_gains(mjm, self._q, self.rest_qpos)
         movers = np.flatnonzero(np.any(gain != 0.0, axis=1))
+        other = next((a for a in movers if model_kind(mjm, a) is None), None)
+        if other is not None:
+            raise navigation.ContractError(
+                f"the gait drive needs the listed joints moved by torque motors or position "
+                f"servos; actuator {mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_ACTUATOR, other)!r} "
+                f"is neither: {model_why_other(mjm, other)}: {OTHER_ADVICE}")
         lo, hi = control_ranges(mjm, np.arange(mjm.nu))
         if all(model_kind(mjm, a) == "torque motors" and int(mjm.actuator_trntype[a]) == int(
                 mujoco.mjtTrn.mjTRN_JOINT) for a in movers):
@@ -176,13 +185,17 @@ class GaitPhysics(navigation.Physics):
                 raise navigation.ContractError(f"the gait drive needs a motor on joint {missing[0]!r}")
             self._acts = acts
             self._servos = np.zeros(0, dtype=np.int64)
+            # a motor's force per unit control on its joint: gear times gain
+            force = mjm.actuator_gear[acts, 0] * mjm.actuator_gainprm[acts, 0]
+            self._motor_sign = np.where((acts >= 0) & (force < 0), -1.0, 1.0)
         elif all(model_kind(mjm, a) == "position servos" for a in movers):
             self._acts = np.full(len(joints), -1, dtype=np.int64)
             self._servos = movers.astype(np.int64)
+            self._motor_sign = np.ones(len(joints))
         else:
             raise navigation.ContractError(
                 "the gait drive needs the listed joints moved by torque motors on them "
-                "or by position servos, not a mix nor other actuators")
+                "or by position servos, not a mix")
         self._ctrl_lo = np.where(self._acts >= 0, lo[self._acts], 0.0)
         self._ctrl_hi = np.where(self._acts >= 0, hi[self._acts], 0.0)
         self._servo_gain = gain[self._servos].copy()
@@ -194,10 +207,9 @@ class GaitPhysics(navigation.Physics):
         joint's sign, from the kinematics at rest (the foot: the far end of the leg's
         outermost body, the first leaf below its last lift joint)."""
         from tasks.kernels.gait import LIFT, SWING
-        d = mujoco.MjData(mjm)
-        mujoco.mj_kinematics(mjm, d)
-        base = self._base
-        rot = d.xmat[base].reshape(3, 3)
+        d = rest_data(mjm, self.rest_qpos)
+        origin, rot = self.frame_at(d)   # the robot's frame: forward x, up z
+        rot = rot.reshape(3, 3)
         legs = len(self.legs)
         swing = [int(np.flatnonzero((self._leg == i) & (self._role == SWING))[0])
                  for i in range(legs)]
@@ -214,11 +226,11 @@ class GaitPhysics(navigation.Physics):
             body = feet[leg]
             geoms = np.flatnonzero(mjm.geom_bodyid == body)
             points = d.geom_xpos[geoms] if len(geoms) else d.xpos[body][None]
-            far = points[np.argmax(np.linalg.norm(points[:, :2] - d.xpos[base][:2], axis=1))]
-            return rot.T @ (far - d.xpos[base])
+            far = points[np.argmax(np.linalg.norm(points[:, :2] - origin[:2], axis=1))]
+            return rot.T @ (far - origin)
 
         def moved(qadr, delta, leg):
-            d.qpos[:] = mjm.qpos0
+            d.qpos[:] = self.rest_qpos
             d.qpos[qadr] += delta
             mujoco.mj_kinematics(mjm, d)
             return foot(leg)

@@ -9,6 +9,7 @@ import numpy as np
 from tasks import navigation
 from tasks.actuators import KINDS, length_gains, model_kind
 from tasks.kernels.joint_motors import JointMotorsRecord
+from tasks.mount.frame import rest_data
 from tasks.realisations.wheels import Planned
 
 
@@ -27,7 +28,7 @@ class JointMotorsPhysics(Planned):
                for name in self.joints]
         if min(ids) < 0:
             raise navigation.ContractError(f"joint motors need the joints {list(self.joints)}")
-        gain, _ = length_gains(mjm, mjm.jnt_qposadr[ids].astype(np.int64))
+        gain, _ = length_gains(mjm, mjm.jnt_qposadr[ids].astype(np.int64), self.rest_qpos)
         motors = np.flatnonzero(np.any(gain != 0.0, axis=1)).astype(np.int64)
         kinds = {model_kind(mjm, a) for a in motors}
         if len(kinds) != 1 or None in kinds:
@@ -42,5 +43,31 @@ class JointMotorsPhysics(Planned):
             per_unit = self.unit / float(mjm.geom_size[geom, 0])
         else:
             per_unit = self.unit
-        self.parts.update(joint_per_unit=per_unit, per_rad=1.0,
+        forward_sign, turn_sign = self._senses(mjm, ids)
+        self.parts.update(joint_per_unit=per_unit * forward_sign, per_rad=1.0 * turn_sign,
                           **self.plan_parts(ids, motors, kinds.pop(), "joint motors"))
+
+    def _senses(self, mjm, ids):
+        """(forward, turn): the senses of the two joints at rest, 1 or -1: the way the
+        forward joint moves the robot along its forward axis (a wheel's hinge rolling on
+        the floor, a slide), the way the turn hinge turns it (about z, or -z). ContractError
+        naming the mount's field for a turn joint not about the vertical, or a forward
+        joint that moves the robot across its forward axis."""
+        d = rest_data(mjm, self.rest_qpos)
+        _, rotation = self.frame_at(d)
+        ahead = np.array([rotation[0], rotation[3], 0.0])   # the frame's x in the plane
+        forward, turn = (d.xaxis[j] for j in ids)
+        if abs(turn[2]) < 1.0 - 1e-6:
+            raise navigation.ContractError(
+                f"action.turn: joint {self.joints[1]!r} turns about ({turn[0]:.2f}, "
+                f"{turn[1]:.2f}, {turn[2]:.2f}) at rest, not the vertical: name a hinge "
+                "about z or -z")
+        rolls = int(mjm.jnt_type[ids[0]]) == int(mujoco.mjtJoint.mjJNT_HINGE)
+        along = np.array([forward[1], -forward[0], 0.0]) if rolls else forward
+        along = along / max(1e-12, float(np.linalg.norm(along)))
+        if abs(float(along @ ahead)) < 0.5:
+            raise navigation.ContractError(
+                f"forward: joint {self.joints[0]!r} moves the robot along ({along[0]:.2f}, "
+                f"{along[1]:.2f}, {along[2]:.2f}), across its forward axis ({ahead[0]:.2f}, "
+                f"{ahead[1]:.2f}): name the base's axis it moves along")
+        return (1.0 if along @ ahead > 0 else -1.0), (1.0 if turn[2] > 0 else -1.0)

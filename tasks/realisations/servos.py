@@ -3,6 +3,7 @@ yaw) driven by velocity servos on its speed along the heading (``forward``), its
 rate (``turn``) and, optionally, a sideways ``grip`` held at zero: the paper's
 ``two_wheel`` robot, and a mount's `servos` kind (its kernels: tasks.kernels.servos)."""
 import mujoco
+import numpy as np
 
 from tasks import navigation
 from tasks.kernels.servos import ServosRecord
@@ -24,12 +25,20 @@ class ServosPhysics(navigation.Physics):
                for name in ("forward", "turn", "grip")}
         if ids["forward"] < 0 or ids["turn"] < 0:
             raise navigation.ContractError(MISSING_ACTUATORS)
-        self.parts.update(forward_actuator=ids["forward"], turn_actuator=ids["turn"])
+        # the turn servo's sense: a servo on the yaw hinge turns the base by its gear's
+        # sign times the hinge's (1 about z, -1 about -z)
+        turn_sign = 1.0
+        if (int(m.actuator_trntype[ids["turn"]]) == int(mujoco.mjtTrn.mjTRN_JOINT)
+                and int(m.actuator_trnid[ids["turn"], 0]) == self.base_joints.get("yaw")):
+            turn_sign = float(np.sign(m.actuator_gear[ids["turn"], 0])) * self.yaw_sign
+        self.parts.update(forward_actuator=ids["forward"], turn_actuator=ids["turn"],
+                          turn_sign=turn_sign)
         # Deadbeat servos: kv = driven inertia / timestep reaches the target speed in one
         # semi-implicit Euler step. The base's mass drives forward and grip, its yaw
         # inertia the turn.
         if "yaw" not in self.base_joints:
-            raise navigation.ContractError("a planar two_wheel base needs a hinge about z")
+            raise navigation.ContractError("a planar two_wheel base needs a hinge about z (a "
+                                           "mount's joints = \"planar\" adds one)")
         dof = {role: m.jnt_dofadr[j] for role, j in self.base_joints.items()}
         mass = 1.0 / m.dof_invweight0[dof["x"]]
         yaw_inertia = 1.0 / m.dof_invweight0[dof["yaw"]]

@@ -36,6 +36,10 @@ class ThrustersPhysics(navigation.Physics):
         if self._free is not None:  # a free joint's dofs start with x, y
             dof_x, dof_y = self.free_dof, self.free_dof + 1
         else:
+            if (self._joints.x_sign, self._joints.y_sign) != (1.0, 1.0):
+                raise navigation.ContractError(
+                    "the floating drive pushes slides along x and y; the base's run along -x "
+                    "or -y (a mount's joints = \"planar\" adds slides along x and y)")
             dof_x = m.jnt_dofadr[self.base_joints["x"]]
             dof_y = m.jnt_dofadr[self.base_joints["y"]]
         #: The bumper geom's id (the bump readings' coast watches its contacts).

@@ -49,8 +49,9 @@ class Planned(Ramped):
         dof = mjm.jnt_dofadr[joints].astype(np.int64)
         motors = np.asarray(motors, dtype=np.int64)
         mode = KINDS.index(kind)
-        gain, lengths = length_gains(mjm, q)
-        forces = motor_forces(mjm, motors, dof) if mode == TORQUE else np.zeros((len(motors), 2))
+        gain, lengths = length_gains(mjm, q, self.rest_qpos)
+        forces = (motor_forces(mjm, motors, dof, self.rest_qpos) if mode == TORQUE
+                  else np.zeros((len(motors), 2)))
         mtm = gram(forces)
         if mode == TORQUE:
             require_independent(forces, mtm, what)
@@ -60,7 +61,7 @@ class Planned(Ramped):
         self._joint_q = q
         self._target, self._ramp_left = np.zeros(2), np.zeros(1, dtype=np.int64)
         return dict(
-            joint_q=q, joint_dof=dof, rest=mjm.qpos0[q].copy(), motors=motors, mode=mode,
+            joint_q=q, joint_dof=dof, rest=self.rest_qpos[q].copy(), motors=motors, mode=mode,
             forces=forces, gram=mtm, gain=gain[motors].copy(), length0=lengths[motors].copy(),
             ctrl_lo=ctrl_lo, ctrl_hi=ctrl_hi, kp=float(self.kp), kv=float(self.kv),
             target=self._target, delta=np.zeros(2), ramp_left=self._ramp_left, tau=np.zeros(2),
