@@ -288,8 +288,8 @@ def test_a_tiny_evolution_runs_resumes_and_is_deterministic(tmp_path, capsys):
     # One study of two generations from scratch: the same trials, bit for bit.
     assert ebrl(*EVOLVE, "--generations", 2, "--out", b).returncode == 0
     assert _record(a) == _record(b)
-    # Again: nothing to do.
-    proc = ebrl(*EVOLVE, "--generations", 2, "--out", a)
+    # Again: nothing to do (in this process: no run starts).
+    proc = ebrl_here(*EVOLVE, "--generations", 2, "--out", a)
     assert proc.returncode == 0 and "0 trials made now, 9 in the study" in proc.stdout
     # The same study with other seeds (or steps, population, start, space): refused.
     before = (a / "study.db").read_bytes()
