@@ -37,6 +37,8 @@ def test_the_headline_rows_carry_the_papers_figures_and_both_protocols():
 @pytest.mark.parametrize("args,message", [
     (["--literal", "x"], "--literal needs --results"),
     (["--results", "{tmp}/R.md", "--literal", "{tmp}"], "no summary.json there"),
+    (["--section", "x"], "--section needs --results"),
+    (["--results", "{tmp}/R.md", "--section", " "], "--section: give the block a name"),
 ])
 def test_literal_refusals(tmp_path, args, message):
     made = tmp_path / "made"
@@ -67,6 +69,15 @@ def test_report_literal_writes_the_headline_into_the_page_and_its_readme(tmp_pat
         body = p.read_text()
         assert text in body and "\nold\n" not in body and body.endswith("kept\n")
     assert json.loads((page.parent / headline.LITERAL_SUMMARY).read_text()) == summary
+    # A named section of the same page: its own block and summary, the rest kept.
+    before = page.read_text()
+    helpers.ebrl("report", out, "--results", page, "--figures", tmp_path / "figs",
+                 "--section", "The 3D robots", check=True)
+    body = page.read_text()
+    begin, end = report.markers("The 3D robots")
+    assert body.startswith(before) and body.count(begin) == body.count(end) == 1
+    assert "| two_wheel | random |" in body.split(begin)[1].split(end)[0]
+    assert json.loads((page.parent / "summary-the-3d-robots.json").read_text()) == summary
 
 
 def _section(text, heading):

@@ -16,6 +16,10 @@ def add_parser(subparsers):
     p.add_argument("--room", type=arguments.room, default=False, metavar="NAME|FILE",
                    help="only the runs in this room (default: every room's runs, each "
                         f"robot's rows in its own room; {rooms.DEFAULT}: the paper's)")
+    p.add_argument("--section", default=None, metavar="NAME",
+                   help="with --results: write this folder's tables into the page's block "
+                        "named NAME (its own markers, made at the end where missing) and "
+                        "summary-NAME.json beside it, the main block untouched")
     p.add_argument("--literal", type=pathlib.Path, default=None, metavar="DIR",
                    help="with --results: the literal protocol's results folder (its "
                         "summary.json); writes the headline (the paper, the literal protocol "
@@ -27,6 +31,10 @@ def _check(args):
     validate.results_folder(args.dir, writable=True)
     validate.output_folder(args.dir / "figures", "the figures folder")
     arguments.check_results(args)
+    if args.section is not None and (args.results is None or args.literal is not None):
+        raise ValueError("--section needs --results, and is not for the headline (--literal)")
+    if args.section is not None and not args.section.strip():
+        raise ValueError("--section: give the block a name")
     if args.literal is not None:
         if args.results is None:
             raise ValueError("--literal needs --results (the page its headline goes in)")
@@ -45,7 +53,8 @@ def run(args):
     try:
         path = report.build(args.dir, args.room)
         if args.results is not None:
-            print(f"published: {report.publish(args.dir, args.results, args.figures)}")
+            page = report.publish(args.dir, args.results, args.figures, args.section)
+            print(f"published: {page}")
         if args.literal is not None:
             for page in _headline(args):
                 print(f"headline: {page}")

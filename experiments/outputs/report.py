@@ -3,6 +3,7 @@ import functools
 import json
 import os
 import pathlib
+import re
 
 import numpy as np
 
@@ -295,16 +296,32 @@ def first_vs_learned_figure(summary, path):
 BEGIN, END = "<!-- ebrl report: generated, do not edit -->", "<!-- ebrl report: end -->"
 
 
-def publish(root, results_md, figures_dir):
-    """Regenerates the tables of results_md (between BEGIN and END, keeping the rest),
-    copies the figures into figures_dir and summary.json beside results_md."""
+def markers(section=None):
+    """(begin, end) of a page's generated block: the main one (BEGIN, END), or a section's,
+    named by it."""
+    if section is None:
+        return BEGIN, END
+    return (f"<!-- ebrl report: {section}: generated, do not edit -->",
+            f"<!-- ebrl report: {section}: end -->")
+
+
+def section_slug(section):
+    """A section's name as a file name's part: summary-<slug>.json."""
+    return re.sub(r"[^a-z0-9]+", "-", section.lower()).strip("-")
+
+
+def publish(root, results_md, figures_dir, section=None):
+    """Regenerates the tables of results_md (between its markers, keeping the rest),
+    copies the figures into figures_dir and summary.json beside results_md; with a
+    section, that section's block and summary-<section>.json, the main block untouched."""
     root, results_md, figures_dir = map(pathlib.Path, (root, results_md, figures_dir))
     summary = json.loads((root / "summary.json").read_text())
     figures_dir.mkdir(parents=True, exist_ok=True)
     for png in sorted((root / "figures").glob("*.png")):
         copy(png, figures_dir / png.name)
     rel = os.path.relpath(figures_dir, results_md.parent)
-    block = [BEGIN, "", *provenance.lines(summary["provenance"]),
+    begin, end = markers(section)
+    block = [begin, "", *provenance.lines(summary["provenance"]),
              *failed_section(summary, "###"),
              "### Section 3.6, the paper against ours", "", comparison_table(summary), "",
              *verdicts.section(summary["tests"], "###"),
@@ -314,9 +331,10 @@ def publish(root, results_md, figures_dir):
         block += ["### Against the optimal path", "", optimal_table(summary["optimal"]), ""]
     for png in sorted((root / "figures").glob("*.png")):
         block += [f"![{png.stem}]({rel}/{png.name})", ""]
-    block.append(END)
-    replace_block(results_md, BEGIN, END, block)
-    results.atomic_write(results_md.parent / "summary.json", results.dumps(summary))
+    block.append(end)
+    replace_block(results_md, begin, end, block)
+    name = "summary.json" if section is None else f"summary-{section_slug(section)}.json"
+    results.atomic_write(results_md.parent / name, results.dumps(summary))
     return results_md
 
 
