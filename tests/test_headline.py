@@ -76,7 +76,7 @@ def test_report_literal_writes_the_headline_into_the_page_and_its_readme(tmp_pat
     body = page.read_text()
     begin, end = report.markers("The 3D robots")
     assert body.startswith(before) and body.count(begin) == body.count(end) == 1
-    assert "| two_wheel | random |" in body.split(begin)[1].split(end)[0]
+    assert "| two_wheel | random | first-trial steps |" in body.split(begin)[1].split(end)[0]
     assert json.loads((page.parent / "summary-the-3d-robots.json").read_text()) == summary
 
 

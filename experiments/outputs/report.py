@@ -313,7 +313,8 @@ def section_slug(section):
 def publish(root, results_md, figures_dir, section=None):
     """Regenerates the tables of results_md (between its markers, keeping the rest),
     copies the figures into figures_dir and summary.json beside results_md; with a
-    section, that section's block and summary-<section>.json, the main block untouched."""
+    section, that section's block (the tests, the claims and the learning curves: the
+    rest is in its REPORT.md) and summary-<section>.json, the main block untouched."""
     root, results_md, figures_dir = map(pathlib.Path, (root, results_md, figures_dir))
     summary = json.loads((root / "summary.json").read_text())
     figures_dir.mkdir(parents=True, exist_ok=True)
@@ -322,14 +323,20 @@ def publish(root, results_md, figures_dir, section=None):
     rel = os.path.relpath(figures_dir, results_md.parent)
     begin, end = markers(section)
     block = [begin, "", *provenance.lines(summary["provenance"]),
-             *failed_section(summary, "###"),
-             "### Section 3.6, the paper against ours", "", comparison_table(summary), "",
-             *verdicts.section(summary["tests"], "###"),
-             "### Goals within the budget", "", goals_table(summary), "",
-             "### Qualitative claims", "", claims_table(summary), ""]
-    if "optimal" in summary:
-        block += ["### Against the optimal path", "", optimal_table(summary["optimal"]), ""]
-    for png in sorted((root / "figures").glob("*.png")):
+             *failed_section(summary, "###")]
+    pngs = sorted((root / "figures").glob("*.png"))
+    if section is None:
+        block += ["### Section 3.6, the paper against ours", "", comparison_table(summary), "",
+                  *verdicts.section(summary["tests"], "###"),
+                  "### Goals within the budget", "", goals_table(summary), "",
+                  "### Qualitative claims", "", claims_table(summary), ""]
+        if "optimal" in summary:
+            block += ["### Against the optimal path", "", optimal_table(summary["optimal"]), ""]
+    else:  # a section beside the main block: the tests, the claims, the learning curves
+        block += [*verdicts.section(summary["tests"], "###"),
+                  "### Qualitative claims", "", claims_table(summary), ""]
+        pngs = [p for p in pngs if p.name.startswith("cumulative_reward")]
+    for png in pngs:
         block += [f"![{png.stem}]({rel}/{png.name})", ""]
     block.append(end)
     replace_block(results_md, begin, end, block)
