@@ -71,6 +71,7 @@ def test_report_literal_writes_the_headline_into_the_page_and_its_readme(tmp_pat
     assert json.loads((page.parent / headline.LITERAL_SUMMARY).read_text()) == summary
     # A named section of the same page: its own block and summary, the rest kept.
     before = page.read_text()
+    (tmp_path / "figs" / "first_vs_learned.png").write_bytes(b"the main block's")
     helpers.ebrl("report", out, "--results", page, "--figures", tmp_path / "figs",
                  "--section", "The 3D robots", check=True)
     body = page.read_text()
@@ -78,6 +79,8 @@ def test_report_literal_writes_the_headline_into_the_page_and_its_readme(tmp_pat
     assert body.startswith(before) and body.count(begin) == body.count(end) == 1
     assert "| two_wheel | random | first-trial steps |" in body.split(begin)[1].split(end)[0]
     assert json.loads((page.parent / "summary-the-3d-robots.json").read_text()) == summary
+    # it copies only the figures it shows: the main block's are left as they were
+    assert (tmp_path / "figs" / "first_vs_learned.png").read_bytes() == b"the main block's"
 
 
 def _section(text, heading):

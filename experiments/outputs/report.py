@@ -318,8 +318,6 @@ def publish(root, results_md, figures_dir, section=None):
     root, results_md, figures_dir = map(pathlib.Path, (root, results_md, figures_dir))
     summary = json.loads((root / "summary.json").read_text())
     figures_dir.mkdir(parents=True, exist_ok=True)
-    for png in sorted((root / "figures").glob("*.png")):
-        copy(png, figures_dir / png.name)
     rel = os.path.relpath(figures_dir, results_md.parent)
     begin, end = markers(section)
     block = [begin, "", *provenance.lines(summary["provenance"]),
@@ -336,7 +334,8 @@ def publish(root, results_md, figures_dir, section=None):
         block += [*verdicts.section(summary["tests"], "###"),
                   "### Qualitative claims", "", claims_table(summary), ""]
         pngs = [p for p in pngs if p.name.startswith("cumulative_reward")]
-    for png in pngs:
+    for png in pngs:  # only the figures the block shows: a section's never replace others
+        copy(png, figures_dir / png.name)
         block += [f"![{png.stem}]({rel}/{png.name})", ""]
     block.append(end)
     replace_block(results_md, begin, end, block)
