@@ -40,7 +40,7 @@ def _ratio(row):
 def rows(current, literal):
     """(robot, condition, figure, paper, literal's row, current's row, current's verdict)
     for the eight tested figures and the four shrinks, in the paper's order."""
-    tc, tl = verdicts.tested(current), verdicts.tested(literal)
+    tc, tl = current["tests"], literal["tests"]  # each summary's own (ebrl report's)
     by = {(r["robot"], r["condition"], r["figure"]): r for r in tl["figures"]}
     shrinks = {(r["robot"], r["condition"]): r for r in tl["shrinks"]}
     out = []
@@ -71,7 +71,7 @@ def table(current, literal):
     for robot, condition, figure, paper, lit, cur, verdict in rows(current, literal):
         lines.append(f"| {robot} | {condition} | {figure} | {paper} | {_ratio(lit)} "
                      f"| {_ratio(cur)} | {verdict} |")
-    tc, tl = verdicts.tested(current), verdicts.tested(literal)
+    tc, tl = current["tests"], literal["tests"]
     within = [sum(bool(r["within_1_5x"]) for r in t["figures"] + t["shrinks"]) for t in (tl, tc)]
     held = [_held(s) for s in (literal, current)]
     tally = verdicts.tally(tc)
