@@ -263,7 +263,7 @@ def objective_figure(s, path):
         best = min(best, y)
         line.append(best)
     ax.step(xs, line, where="post", color="C3", label="best so far")
-    ax.set_yscale("log")
+    report.log_y(ax)
     ax.set_xlabel("trial")
     ax.set_ylabel("objective (lower is closer to the paper)")
     ax.legend(loc="upper right", fontsize=8)
