@@ -14,6 +14,7 @@ import pytest
 
 import helpers
 from helpers import ROOT, ebrl_here
+from experiments.checks import procs
 
 
 ebrl = functools.partial(helpers.ebrl, check=True)  # a failure raises, unless check=False
@@ -188,32 +189,10 @@ def wait_for_runs(out, count, proc, timeout=120):
     return len(list(out.glob("*/*/seed_*/run.json")))
 
 
-def children(pid):
-    """The live (not zombie) processes whose parent is pid, as pid -> command line."""
-    found = {}
-    for entry in pathlib.Path("/proc").iterdir():
-        try:
-            stat = (entry / "stat").read_text()
-            state, ppid = stat.rsplit(")", 1)[1].split()[:2]
-            if int(ppid) == pid and state != "Z":
-                found[int(entry.name)] = (entry / "cmdline").read_bytes().replace(b"\0", b" ")
-        except (OSError, ValueError):
-            continue
-    return found
-
-
-def alive(pid):
-    try:
-        state = pathlib.Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except OSError:
-        return False
-    return state != "Z"
-
-
 @pytest.mark.parametrize("moment,workers", [
     ("starting", 2),   # while it imports and starts the pool: nothing on disk yet
     ("running", 1),    # between runs, two on disk
-    ("running", 2),    # with the spawn pool's workers busy
+    ("running", 2),    # with the pool's workers busy
     ("reporting", 2),  # every run on disk, the report being built
 ])
 @pytest.mark.slow
@@ -250,8 +229,8 @@ def test_ctrl_c_stops_the_workers_in_one_line_and_the_command_resumes(kill_clean
     args = [*KILL_ARGS, "--workers", "2", "--out", out]
     proc = start_ebrl(*args)
     wait_for_runs(out, 1, proc)
-    workers = {pid: cmd for pid, cmd in children(proc.pid).items() if b"spawn_main" in cmd}
-    assert workers, "no spawn worker found"
+    workers = procs.pool_workers(proc.pid)
+    assert workers, "no pool worker found"
     if how == "ctrl-c":
         os.killpg(proc.pid, signal.SIGINT)  # as Ctrl-C at a terminal: the whole group
     else:
@@ -261,9 +240,9 @@ def test_ctrl_c_stops_the_workers_in_one_line_and_the_command_resumes(kill_clean
     assert len(err.strip().splitlines()) == 1 and "interrupted" in err, err
     assert "Traceback" not in err
     deadline = time.time() + 5
-    while time.time() < deadline and any(alive(pid) for pid in workers):
+    while time.time() < deadline and any(procs.alive(pid) for pid in workers):
         time.sleep(0.05)
-    assert not [pid for pid in workers if alive(pid)], "workers left running"
+    assert not [pid for pid in workers if procs.alive(pid)], "workers left running"
     done = len(list(out.glob("*/*/seed_*/run.json")))
     assert 1 <= done < 6, done
     # No run folder holds a failed record: an interrupted run is simply unfinished.

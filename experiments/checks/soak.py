@@ -21,24 +21,15 @@ import sys
 import tempfile
 import time
 
+from experiments.checks import procs
+
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 
 def _workers_of(pid, min_cpu):
-    """The live spawn worker processes whose parent is pid and which have used at least
-    min_cpu seconds of CPU (past their imports: running runs)."""
-    found = []
-    tick = os.sysconf("SC_CLK_TCK")
-    for entry in pathlib.Path("/proc").iterdir():
-        try:
-            fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
-            state, ppid, cpu = fields[0], int(fields[1]), (int(fields[11]) + int(fields[12])) / tick
-            if (ppid == pid and state != "Z" and cpu >= min_cpu
-                    and b"spawn_main" in (entry / "cmdline").read_bytes()):
-                found.append(int(entry.name))
-        except (OSError, ValueError, IndexError):
-            continue
-    return found
+    """The live pool workers of the command at pid (procs.pool_workers) that have used at
+    least min_cpu seconds of CPU (past loading their kernels: running runs)."""
+    return [w for w in procs.pool_workers(pid) if (procs.cpu_seconds(w) or 0) >= min_cpu]
 
 
 def _command(args, out):
