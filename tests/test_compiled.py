@@ -236,13 +236,15 @@ def test_the_agents_the_tasks_and_the_loops_damaged_entries_mend_with_the_same_b
 def test_the_warm_up_reaches_every_realisation_and_learner():
     """make test's warm-up (experiments.checks.warm) runs the kernels of every realisation
     a shipped robot or mount uses, both loops and every learner, so that no test process
-    compiles what another is compiling. joint_motors is no shipped file's: its tests mount
-    their own."""
+    compiles what another is compiling; one realisation's runs in one process. joint_motors
+    is no shipped file's: its tests mount their own."""
     from experiments.checks import warm
     from experiments.running import execution
     from tasks.realisations import REALISATIONS
     from tasks.robots import resolve
-    pairs = warm.specs()
+    groups = warm.specs()
+    assert all(len({resolve(s.robot).realisation for s, _ in group}) == 1 for group in groups)
+    pairs = [pair for group in groups for pair in group]
     assert set(REALISATIONS) - {resolve(s.robot).realisation for s, _ in pairs} == {"joint_motors"}
     assert {s.agent for s, _ in pairs} == set(execution.AGENTS)
     assert {fused for _, fused in pairs} == {True, False}
