@@ -1,7 +1,8 @@
 """What several test files share: the repository root, and the `ebrl` command run as a
-real process (python -m experiments), as a user runs it, or in this process (the unit
-tier's way to check a bad input: the same main(), the same one line and exit status,
-without a second's imports per case)."""
+real process (python -m experiments), as a user runs it, or in this process (the same
+main(), the same one line and exit status, without a second's imports per command: the
+unit tier's way to check a bad input, and the slow tier's for a command that is not
+killed)."""
 import contextlib
 import io
 import os
@@ -26,8 +27,12 @@ def ebrl(*args, check=False, cwd=ROOT, **kw):
 def ebrl_here(*args, cwd=ROOT, check=False):
     """`ebrl ARGS` in this process (experiments.cli.main, in cwd, its output captured),
     as a CompletedProcess: its exit status, stdout and stderr. For commands that refuse
-    their input before any work; a traceback propagates as the exception it is. check as
-    ebrl's."""
+    their input before any work, and for whole commands whose process is neither killed
+    nor given other environment variables (the test-only hooks): their runs are made in
+    the pool's worker processes as ever, forked from the one forkserver this pytest
+    worker starts (experiments.running.runner._context), without a second of imports per
+    command. What is written to the file descriptors by native code is not captured. A
+    traceback propagates as the exception it is. check as ebrl's."""
     from experiments.cli import main
     out, err = io.StringIO(), io.StringIO()
     here, handler = os.getcwd(), signal.getsignal(signal.SIGTERM)

@@ -13,8 +13,8 @@ def test_a_task_setting_is_recorded_and_changes_the_run(tmp_path):
     base = ["run", "--robot", "floating", "--condition", "random", "--seeds", "0",
             "--steps", "400", "--workers", "1", "--no-progress"]
     # The floating robot's bump reading is "stop" (tasks.robots); --set changes it.
-    assert ebrl(*base, "--out", tmp_path / "own").returncode == 0
-    proc = ebrl(*base, "--set", "bump=grip", "--out", tmp_path / "grip")
+    assert ebrl_here(*base, "--out", tmp_path / "own").returncode == 0
+    proc = ebrl_here(*base, "--set", "bump=grip", "--out", tmp_path / "grip")
     assert proc.returncode == 0, proc.stderr
     run = tmp_path / "grip" / "floating" / "random" / "seed_000"
     config = json.loads((run / "config.json").read_text())
@@ -47,7 +47,7 @@ def test_ablate_runs_each_cell_where_it_applies_and_resumes(tmp_path):
     data = json.loads((out / "ablation.json").read_text())
     assert set(data["cells"]) == set(cells)
     assert "bump=bounce" in (out / "ABLATION.md").read_text()
-    again = ebrl(*args)
+    again = ebrl_here(*args)
     assert again.returncode == 0 and again.stdout.strip().endswith("ABLATION.md")
     assert json.loads((out / "ablation.json").read_text()) == data
     bad = ebrl_here("ablate", "--readings", "colour", "--out", tmp_path / "x")

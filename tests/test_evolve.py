@@ -165,8 +165,8 @@ def test_the_paper_files_reproduce_the_default_runs_bit_for_bit(robot):
 def test_run_with_a_behaviour_file_records_it_and_matches_the_default(tmp_path):
     common = ["run", "--robot", "two_wheel", "--condition", "avoidance", "--seeds", "0",
               "--steps", 600, "--workers", 1, "--no-progress"]
-    assert ebrl(*common, "--out", tmp_path / "default").returncode == 0
-    proc = ebrl(*common, "--out", tmp_path / "paper", "--behaviour", PAPER_FILES["eq8"])
+    assert ebrl_here(*common, "--out", tmp_path / "default").returncode == 0
+    proc = ebrl_here(*common, "--out", tmp_path / "paper", "--behaviour", PAPER_FILES["eq8"])
     assert proc.returncode == 0, proc.stderr
     run = pathlib.Path("two_wheel/avoidance/seed_000")
     config = json.loads((tmp_path / "paper" / run / "config.json").read_text())
@@ -264,7 +264,7 @@ def _record(out):
 @pytest.mark.slow
 def test_a_tiny_evolution_runs_resumes_and_is_deterministic(tmp_path, capsys):
     a, b, c = tmp_path / "a", tmp_path / "b", tmp_path / "c"
-    proc = ebrl(*EVOLVE, "--generations", 1, "--out", a)
+    proc = ebrl_here(*EVOLVE, "--generations", 1, "--out", a)
     assert proc.returncode == 0, proc.stderr
     trials = _study(a).trials
     assert len(trials) == 5 and all(t.state.name == "COMPLETE" for t in trials)
@@ -283,10 +283,10 @@ def test_a_tiny_evolution_runs_resumes_and_is_deterministic(tmp_path, capsys):
     shutil.copytree(a, c)
 
     # The same command with one more generation resumes: 4 more trials, the first 5 kept.
-    proc = ebrl(*EVOLVE, "--generations", 2, "--out", a)
+    proc = ebrl_here(*EVOLVE, "--generations", 2, "--out", a)
     assert proc.returncode == 0 and "4 trials made now, 9 in the study" in proc.stdout
     # One study of two generations from scratch: the same trials, bit for bit.
-    assert ebrl(*EVOLVE, "--generations", 2, "--out", b).returncode == 0
+    assert ebrl_here(*EVOLVE, "--generations", 2, "--out", b).returncode == 0
     assert _record(a) == _record(b)
     # Again: nothing to do (in this process: no run starts).
     proc = ebrl_here(*EVOLVE, "--generations", 2, "--out", a)
@@ -302,7 +302,7 @@ def test_a_tiny_evolution_runs_resumes_and_is_deterministic(tmp_path, capsys):
     s = _study(c)
     s.sampler = problem.sampler(len(s.trials))
     left = s.ask(problem.distributions())
-    proc = ebrl(*EVOLVE, "--generations", 2, "--out", c)
+    proc = ebrl_here(*EVOLVE, "--generations", 2, "--out", c)
     assert proc.returncode == 0, proc.stderr
     trials = _study(c).trials
     assert trials[5].state.name == "FAIL" and trials[5].user_attrs["error"].startswith("interrupted")
@@ -311,11 +311,12 @@ def test_a_tiny_evolution_runs_resumes_and_is_deterministic(tmp_path, capsys):
 
 
 @pytest.mark.slow
+@pytest.mark.filterwarnings("error::RuntimeWarning")  # cmaes's at population 2: not the user's
 def test_evolution_without_learning_never_lets_the_memory_act(tmp_path):
     out = tmp_path / "c"
-    proc = ebrl("evolve", "--robot", "two_wheel", "--population", 2, "--generations", 1,
-                "--seeds", 1000, "--steps", 600, "--workers", 1, "--no-progress",
-                "--no-learning", "--out", out)
+    proc = ebrl_here("evolve", "--robot", "two_wheel", "--population", 2, "--generations", 1,
+                     "--seeds", 1000, "--steps", 600, "--workers", 1, "--no-progress",
+                     "--no-learning", "--out", out)
     assert proc.returncode == 0, proc.stderr
     trials = _study(out, "evolve-two_wheel-controller").trials
     assert len(trials) == 3 and not any(k.startswith("initial_") for k in trials[0].params)
@@ -365,18 +366,18 @@ def test_evolve_report_sets_the_evolved_learner_beside_the_papers_rule(tmp_path)
     EVOLVE.md's ratio is the hand-coded mean steps per trial over the evolved one, computed
     here from the runs' own run.json; folders not run are named; the RESULTS.md block."""
     evo, hand, evolved = tmp_path / "evolve", tmp_path / "results", tmp_path / "evolved"
-    assert ebrl(*EVOLVE, "--generations", 1, "--out", evo).returncode == 0
+    assert ebrl_here(*EVOLVE, "--generations", 1, "--out", evo).returncode == 0
     best = evo / "evolve-two_wheel_best.json"
     common = ["run", "--robot", "two_wheel", "--condition", "avoidance", "--seeds", "0-2",
               "--steps", 4000, "--workers", 1, "--no-progress"]
-    assert ebrl(*common, "--out", hand).returncode == 0
+    assert ebrl_here(*common, "--out", hand).returncode == 0
     evolved.mkdir()
-    assert ebrl(*common, "--behaviour", best, "--out", evolved / "learner").returncode == 0
+    assert ebrl_here(*common, "--behaviour", best, "--out", evolved / "learner").returncode == 0
     results_md = tmp_path / "RESULTS.md"
     results_md.write_text("# R\n\nkept above\n")
     out, figures = tmp_path / "EVOLVE.md", tmp_path / "figures"
-    proc = ebrl("evolve-report", "--evolve", evo, "--hand", hand, "--evolved", evolved,
-                "--out", out, "--figures", figures, "--results", results_md)
+    proc = ebrl_here("evolve-report", "--evolve", evo, "--hand", hand, "--evolved", evolved,
+                     "--out", out, "--figures", figures, "--results", results_md)
     assert proc.returncode == 0, proc.stderr
     text = out.read_text()
 
@@ -397,6 +398,6 @@ def test_evolve_report_sets_the_evolved_learner_beside_the_papers_rule(tmp_path)
     page = results_md.read_text()
     assert page.startswith("# R\n\nkept above") and row in page
     bad = ebrl_here("evolve-report", "--evolve", evo, "--hand", tmp_path / "nowhere", "--evolved",
-               evolved, "--out", tmp_path / "E2.md")
+                    evolved, "--out", tmp_path / "E2.md")
     assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1
     assert "nowhere" in bad.stderr and not (tmp_path / "E2.md").exists()

@@ -18,6 +18,7 @@ from experiments.checks import procs
 
 
 ebrl = functools.partial(helpers.ebrl, check=True)  # a failure raises, unless check=False
+here = functools.partial(ebrl_here, check=True)  # the same command in this process
 
 
 def summary(out):
@@ -42,7 +43,7 @@ SMALL = ["--robot", "paper", "--condition", "all", "--seeds", "0-1", "--steps", 
 @pytest.fixture(scope="module")
 def clean_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("clean") / "results"
-    ebrl("run", *SMALL, "--workers", "1", "--out", out)
+    here("run", *SMALL, "--workers", "1", "--out", out)
     return out
 
 
@@ -63,7 +64,7 @@ def test_claim_odds_draws_seeds_with_replacement_and_judges_each_draw_as_the_rep
     from experiments.outputs import report
     from experiments.running import results
     out = tmp_path / "results"  # long enough for a goal in both conditions on both seeds
-    ebrl("run", "--robot", "two_wheel", "--seeds", "0-1", "--steps", "8000", "--no-progress",
+    here("run", "--robot", "two_wheel", "--seeds", "0-1", "--steps", "8000", "--no-progress",
          "--workers", "1", "--out", out)
     odds = _claim_odds()
     runs = results.load_runs(out)
@@ -134,15 +135,15 @@ def test_a_short_run_writes_every_file(clean_run):
 @pytest.mark.slow
 def test_rerun_skips_and_report_is_reproducible(clean_run):
     before = (clean_run / "summary.json").read_bytes()
-    proc = ebrl("run", *SMALL, "--out", clean_run)
+    proc = here("run", *SMALL, "--out", clean_run)
     assert "0 runs made, 8 already on disk" in proc.stdout
-    ebrl("report", clean_run)
+    here("report", clean_run)
     assert (clean_run / "summary.json").read_bytes() == before
 
 
 @pytest.mark.slow
 def test_worker_count_does_not_change_results(clean_run, tmp_path):
-    ebrl("run", *SMALL, "--workers", "2", "--out", tmp_path / "w2")
+    here("run", *SMALL, "--workers", "2", "--out", tmp_path / "w2")
     assert arrays(tmp_path / "w2") == arrays(clean_run)
     assert summary(tmp_path / "w2") == summary(clean_run)
 
@@ -163,7 +164,7 @@ KILL_ARGS = ["run", "--robot", "two_wheel", "--condition", "all", "--seeds", "0-
 @pytest.fixture(scope="module")
 def kill_clean(tmp_path_factory):
     out = tmp_path_factory.mktemp("kill_clean") / "clean"
-    ebrl(*KILL_ARGS, "--workers", "1", "--out", out)
+    here(*KILL_ARGS, "--workers", "1", "--out", out)
     return out
 
 
@@ -214,7 +215,7 @@ def test_kill_then_resume_gives_the_clean_summary(kill_clean, tmp_path, moment, 
         assert proc.returncode == -signal.SIGKILL
     if moment == "running":
         assert 2 <= done < 6, done
-    proc = ebrl(*args)
+    proc = here(*args)
     assert proc.stdout.strip().startswith(f"{6 - done} runs made, {done} already on disk")
     assert summary(out) == summary(kill_clean)
     assert arrays(out) == arrays(kill_clean)
@@ -248,7 +249,7 @@ def test_ctrl_c_stops_the_workers_in_one_line_and_the_command_resumes(kill_clean
     # No run folder holds a failed record: an interrupted run is simply unfinished.
     assert all(json.loads(p.read_text())["status"] == "complete"
                for p in out.glob("*/*/seed_*/run.json"))
-    proc = ebrl(*args)
+    proc = here(*args)
     assert proc.stdout.strip().startswith(f"{6 - done} runs made, {done} already on disk")
     assert summary(out) == summary(kill_clean)
     assert arrays(out) == arrays(kill_clean)
@@ -281,13 +282,13 @@ def test_a_failed_run_is_recorded_named_never_averaged_and_retried(clean_run, tm
     assert s["failed"] == [{"run": failing, "error": record["error"]}]
     group = next(g for g in s["groups"] if (g["robot"], g["condition"]) == ("two_wheel", "avoidance"))
     assert group["seeds"] == 1
-    proc = ebrl("report", out, check=False)
+    proc = here("report", out, check=False)
     assert proc.returncode == 1 and failing in proc.stderr and "Traceback" not in proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1
     report = (out / "REPORT.md").read_text()
     assert "Failed runs: 1, not averaged" in report and failing in report
     # A rerun without the hook retries it alone, and the summary is a clean run's.
-    proc = ebrl("run", *SMALL, "--workers", "2", "--out", out)
+    proc = here("run", *SMALL, "--workers", "2", "--out", out)
     assert "1 runs made, 7 already on disk" in proc.stdout and proc.stderr.strip() == ""
     assert summary(out) == summary(clean_run)
     assert arrays(out) == arrays(clean_run)
@@ -307,7 +308,7 @@ def test_a_worker_that_dies_fails_only_its_own_run(clean_run, tmp_path):
     assert json.loads((out / dying / "run.json").read_text())["status"] == "failed"
     assert {k: v for k, v in arrays(out).items() if k != dying} == {
         k: v for k, v in arrays(clean_run).items() if k != dying}
-    ebrl("run", *SMALL, "--workers", "2", "--out", out)
+    here("run", *SMALL, "--workers", "2", "--out", out)
     assert summary(out) == summary(clean_run)
 
 
@@ -354,7 +355,7 @@ def test_a_damaged_run_is_named_skipped_and_made_again_with_the_same_bits(clean_
     (nan / "run.json").write_text(json.dumps(run))
     damaged = {folder: {p.name: p.read_bytes() for p in folder.iterdir()}
                for folder in (cut, short, nan)}
-    proc = ebrl("report", out)
+    proc = here("report", out)
     assert "Traceback" not in proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 3 and all(line.startswith("ebrl: warning: ") for line in lines)
@@ -363,7 +364,7 @@ def test_a_damaged_run_is_named_skipped_and_made_again_with_the_same_bits(clean_
         assert any(f"{folder}: damaged run: {said}" in line for line in lines), "\n".join(lines)
     assert "## Damaged runs: 3, skipped" in (out / "REPORT.md").read_text()
     assert len(summary(out)["damaged"]) == 3
-    proc = ebrl("run", *SMALL, "--out", out)
+    proc = here("run", *SMALL, "--out", out)
     assert proc.stdout.strip().splitlines()[-1].startswith("3 runs made, 5 already on disk")
     assert arrays(out) == arrays(clean_run) and summary(out) == summary(clean_run)
     for folder, files in damaged.items():  # set aside, whole
@@ -385,7 +386,7 @@ def test_other_parameters_are_refused_not_overwritten(clean_run, tmp_path):
 def test_sweep_table_takes_the_default_rows_from_a_baseline_run(clean_run, tmp_path):
     sweep = ["sweep", "--robot", "two_wheel", "--condition", "avoidance", "--values", "0.4",
              "--steps", "400", "--out", tmp_path / "sweeps", "--baseline", clean_run, "--no-progress"]
-    ebrl(*sweep, "--seeds", "0-1")
+    here(*sweep, "--seeds", "0-1")
     table = (tmp_path / "sweeps" / "SWEEP.md").read_text()
     base = summary(clean_run)["groups"]
     goals = next(g for g in base if (g["robot"], g["condition"]) == ("two_wheel", "avoidance"))["goals"]

@@ -26,6 +26,7 @@ SET = ["--robot", "two_wheel", "--condition", "all", "--seeds", "0-3", "--steps"
 
 
 ebrl = functools.partial(helpers.ebrl, check=True)  # a failure raises, unless check=False
+here = functools.partial(helpers.ebrl_here, check=True)  # the same command in this process
 
 
 def env(**hooks):
@@ -63,7 +64,7 @@ def leftovers(out):
 @pytest.fixture(scope="module")
 def clean(tmp_path_factory):
     out = tmp_path_factory.mktemp("clean") / "results"
-    ebrl("run", *SET, "--workers", "2", "--out", out, env=env())
+    here("run", *SET, "--workers", "2", "--out", out)
     return out
 
 
@@ -89,7 +90,7 @@ def test_a_crashed_worker_is_recorded_with_its_signal_whatever_the_workers(clean
         assert got[name]["error"].startswith(f"WorkerDied: the worker process running {name} "
                                              f"was killed by {sig}")
     assert {k: v for k, v in arrays(clean).items() if k not in crash} == arrays(out)
-    proc = ebrl("run", *SET, "--workers", workers, "--out", out, env=env())
+    proc = here("run", *SET, "--workers", workers, "--out", out)
     assert proc.stdout.strip().startswith("2 runs made, 6 already on disk")
     assert summary(out) == summary(clean) and arrays(out) == arrays(clean)
 
@@ -108,7 +109,7 @@ def test_a_disk_that_fills_mid_run_is_one_line_and_the_rerun_finishes(clean, tmp
     assert len(got) == 2 and all(r["status"] == "complete" for r in got.values())
     assert len(list(out.glob("*/*/seed_*"))) > 2  # the third run's folder: no run.json
     assert leftovers(out) == []
-    proc = ebrl("run", *SET, "--workers", "2", "--out", out, env=env())
+    proc = here("run", *SET, "--workers", "2", "--out", out)
     assert proc.stdout.strip().startswith("6 runs made, 2 already on disk")
     assert summary(out) == summary(clean) and arrays(out) == arrays(clean)
 
@@ -143,7 +144,7 @@ def test_a_small_filesystem_that_fills_up_then_is_freed(clean, tmp_path, small_d
     assert 1 <= len(done) < 8 and all(r["status"] == "complete" for r in done.values())
     assert leftovers(out) == []
     remount(small_disk, "size=16m")  # space freed
-    proc = ebrl("run", *SET, "--workers", "2", "--out", out, env=env())
+    proc = here("run", *SET, "--workers", "2", "--out", out)
     assert proc.stdout.strip().startswith(f"{8 - len(done)} runs made, {len(done)} already on disk")
     assert summary(out) == summary(clean) and arrays(out) == arrays(clean)
 
@@ -168,7 +169,7 @@ def test_a_folder_turned_read_only_mid_run_then_writable(clean, tmp_path, small_
     done = records(out)
     assert 1 <= len(done) < 8 and all(r["status"] == "complete" for r in done.values())
     assert leftovers(out) == []
-    proc = ebrl("run", *SET, "--workers", "2", "--out", out, env=env())
+    proc = here("run", *SET, "--workers", "2", "--out", out)
     assert proc.stdout.strip().startswith(f"{8 - len(done)} runs made, {len(done)} already on disk")
     assert summary(out) == summary(clean) and arrays(out) == arrays(clean)
 
@@ -381,7 +382,7 @@ def test_the_rerun_advice_by_kind_through_the_commands(tmp_path):
             CANNOT_RERUN[kind][0]()
         results.write_failure(tmp_path, runner.plan(["two_wheel"], ["avoidance"], [seed], 200)[0],
                               raised.value)
-    proc = ebrl("report", tmp_path, check=False)
+    proc = here("report", tmp_path, check=False)
     lines = proc.stderr.strip().splitlines()
     assert proc.returncode == 2 and len(lines) == 1, proc.stderr
     assert lines[0].startswith(f"ebrl: error: no complete runs under {tmp_path} (5 failed: ")
@@ -479,6 +480,6 @@ def test_a_trial_whose_runs_failed_is_marked_failed_not_scored(tmp_path):
         assert t.value is None and "rungs" not in t.user_attrs
         assert "floating/random/seed_000: PhysicsError" in t.user_attrs["error"]
     # One more trial, without the failure: scored.
-    proc = ebrl(*FIT[:2], "3", *FIT[3:], "--out", out, env=env())
+    proc = here(*FIT[:2], "3", *FIT[3:], "--out", out)
     got = trials(out)
     assert got[2].state == optuna.trial.TrialState.COMPLETE and got[2].value is not None

@@ -103,7 +103,7 @@ FIT = ["fit", "--seeds", "0", "--promote-seeds", "0", "--steps", "1500", "--batc
 
 def test_a_tiny_study_runs_resumes_and_reaches_the_runs(tmp_path):
     out = tmp_path / "fit"
-    proc = ebrl(*FIT, "--trials", "2", "--out", out)
+    proc = ebrl_here(*FIT, "--trials", "2", "--out", out)
     assert proc.returncode == 0, proc.stderr
     trials = _trials(out)
     assert [t.number for t in trials] == [0, 1] and all(t.state.name == "COMPLETE" for t in trials)
@@ -127,7 +127,7 @@ def test_a_tiny_study_runs_resumes_and_reaches_the_runs(tmp_path):
     import optuna
     s = optuna.load_study(study_name="fit", storage=study.storage_url(None, out))
     left = s.ask(fit.Problem(names=tuple(params)).distributions())
-    proc = ebrl(*FIT, "--trials", "4", "--out", out)
+    proc = ebrl_here(*FIT, "--trials", "4", "--out", out)
     assert proc.returncode == 0, proc.stderr
     trials = _trials(out)
     assert [t.number for t in trials] == [0, 1, 2, 3, 4]
@@ -136,7 +136,7 @@ def test_a_tiny_study_runs_resumes_and_reaches_the_runs(tmp_path):
     assert sum(t.state.name == "COMPLETE" for t in trials) == 4
     # The same command again: nothing to do, nothing changes.
     before = (out / "study.db").stat().st_size
-    proc = ebrl(*FIT, "--trials", "4", "--out", out)
+    proc = ebrl_here(*FIT, "--trials", "4", "--out", out)
     assert proc.returncode == 0 and "0 trials made now, 5 in the study" in proc.stdout
     assert len(_trials(out)) == 5 and (out / "study.db").stat().st_size == before
 

@@ -10,7 +10,7 @@ import sys
 import pytest
 
 from experiments.running import results
-from test_faults import FIT, ebrl, env, leftovers
+from test_faults import FIT, ebrl, env, here, leftovers
 
 #: The slow tier (pyproject.toml's markers): processes starved of disk.
 pytestmark = pytest.mark.slow
@@ -27,12 +27,11 @@ def reported(tmp_path_factory):
     """A tiny run folder with its report, a RESULTS.md beside it and a study's FIT.md."""
     root = tmp_path_factory.mktemp("reported")
     out = root / "results"
-    ebrl("run", "--robot", "two_wheel", "--condition", "all", "--seeds", "0", "--steps",
-         "300", "--workers", "2", "--no-progress", "--out", out, env=env())
+    here("run", "--robot", "two_wheel", "--condition", "all", "--seeds", "0", "--steps",
+         "300", "--workers", "2", "--no-progress", "--out", out)
     (root / "RESULTS.md").write_text("# R\n\nkept above\n")
-    ebrl("report", out, "--results", root / "RESULTS.md", "--figures", root / "figures",
-         env=env())
-    ebrl(*FIT[:2], "2", *FIT[3:], "--out", root / "fit", env=env())
+    here("report", out, "--results", root / "RESULTS.md", "--figures", root / "figures")
+    here(*FIT[:2], "2", *FIT[3:], "--out", root / "fit")
     return root
 
 
@@ -77,7 +76,7 @@ def test_a_full_disk_at_fit_md_is_one_line_and_the_same_command_finishes(reporte
     proc = ebrl(*args, env=env(EBRL_TEST_DISK_FULL_AT="FIT.md"), check=False)
     full_disk_line(proc.returncode, proc.stderr, out)
     assert (out / "FIT.md").read_text() == "an older FIT.md\n" and leftovers(out) == []
-    proc = ebrl(*args, env=env())
+    proc = here(*args)
     assert "0 trials made now, 2 in the study" in proc.stdout
     assert (out / "FIT.md").read_text() == (reported / "fit" / "FIT.md").read_text()
 
@@ -87,7 +86,7 @@ def test_a_full_disk_at_evolve_md_is_one_line_and_keeps_the_last(reported, tmp_p
     (tmp_path / "none").mkdir()  # no studies, no evolved runs: their lines say so
     args = ["evolve-report", "--evolve", tmp_path / "none", "--hand", reported / "results",
             "--evolved", tmp_path / "none", "--out", out, "--figures", figures]
-    ebrl(*args, env=env())
+    here(*args)
     before = out.read_bytes()
     out.write_bytes(before + b"\nan older page\n")
     proc = ebrl(*args, env=env(EBRL_TEST_DISK_FULL_AT="EVOLVE.md"), check=False)
@@ -108,7 +107,7 @@ def test_a_full_disk_at_a_video_is_one_line_and_keeps_the_last(tmp_path):
     proc = ebrl(*args, env=env(EBRL_TEST_DISK_FULL_AT="v.mp4"), check=False)
     full_disk_line(proc.returncode, proc.stderr, tmp_path)
     assert video.read_bytes() == b"an older video" and leftovers(tmp_path) == []
-    ebrl(*args, env=env())
+    here(*args)
     assert video.stat().st_size > 1000
 
 

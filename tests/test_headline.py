@@ -53,16 +53,16 @@ def test_literal_refusals(tmp_path, args, message):
 @pytest.mark.slow
 def test_report_literal_writes_the_headline_into_the_page_and_its_readme(tmp_path):
     out = tmp_path / "results"
-    helpers.ebrl("run", "--robot", "two_wheel", "--condition", "all", "--seeds", "0-1",
-                 "--steps", "300", "--workers", "1", "--no-progress", "--out", out, check=True)
+    helpers.ebrl_here("run", "--robot", "two_wheel", "--condition", "all", "--seeds", "0-1",
+                      "--steps", "300", "--workers", "1", "--no-progress", "--out", out, check=True)
     page, readme = tmp_path / "site" / "RESULTS.md", tmp_path / "site" / "README.md"
     page.parent.mkdir()
     from experiments.outputs import report
     page.write_text(f"# top\n\n{headline.BEGIN}\nold\n{headline.END}\n\n"
                     f"{report.BEGIN}\n{report.END}\nkept\n")
     readme.write_text(f"# top\n\n{headline.BEGIN}\nold\n{headline.END}\n\nkept\n")
-    helpers.ebrl("report", out, "--results", page, "--figures", tmp_path / "figs",
-                 "--literal", out, check=True)
+    helpers.ebrl_here("report", out, "--results", page, "--figures", tmp_path / "figs",
+                      "--literal", out, check=True)
     summary = json.loads((out / "summary.json").read_text())
     text = "\n".join(headline.block(summary, summary))
     for p in (page, readme):
@@ -72,8 +72,8 @@ def test_report_literal_writes_the_headline_into_the_page_and_its_readme(tmp_pat
     # A named section of the same page: its own block and summary, the rest kept.
     before = page.read_text()
     (tmp_path / "figs" / "first_vs_learned.png").write_bytes(b"the main block's")
-    helpers.ebrl("report", out, "--results", page, "--figures", tmp_path / "figs",
-                 "--section", "The 3D robots", check=True)
+    helpers.ebrl_here("report", out, "--results", page, "--figures", tmp_path / "figs",
+                      "--section", "The 3D robots", check=True)
     body = page.read_text()
     begin, end = report.markers("The 3D robots")
     assert body.startswith(before) and body.count(begin) == body.count(end) == 1

@@ -122,9 +122,9 @@ def test_the_traces_figure_legends_cover_neither_start_nor_goal(tmp_path):
     room = tmp_path / "small.txt"
     room.write_text(SMALL)
     out = tmp_path / "results"
-    helpers.ebrl("run", "--robot", "two_wheel", "--condition", "all", "--seeds", "0",
-                 "--steps", "3000", "--room", room, "--workers", "1", "--no-progress",
-                 "--out", out, check=True)
+    helpers.ebrl_here("run", "--robot", "two_wheel", "--condition", "all", "--seeds", "0",
+                      "--steps", "3000", "--room", room, "--workers", "1", "--no-progress",
+                      "--out", out, check=True)
     runs = results.load_runs(out)
     label = "two_wheel@small"
     assert {c: r["metrics"]["goals"] >= 2 for (_, c, _), r in runs.items()} == {

@@ -75,8 +75,8 @@ def test_the_installed_packages_are_the_locks():
 @pytest.mark.slow
 def test_a_run_and_its_report_name_the_lock(tmp_path):
     out = tmp_path / "results"
-    helpers.ebrl("run", "--robot", "two_wheel", "--condition", "avoidance", "--seeds", "0",
-                 "--steps", "200", "--workers", "1", "--no-progress", "--out", out, check=True)
+    helpers.ebrl_here("run", "--robot", "two_wheel", "--condition", "avoidance", "--seeds", "0",
+                      "--steps", "200", "--workers", "1", "--no-progress", "--out", out, check=True)
     config = json.loads(next(out.glob("*/*/seed_*/config.json")).read_text())
     assert config["versions"]["lock"] == lock.digest()
     assert config["versions"]["lock_installed"] == lock.describe()["lock_installed"]

@@ -282,7 +282,7 @@ def test_a_tiny_design_runs_and_resumes_without_redoing_work(tmp_path):
     assert len(runs) <= 3 * 2 * 2 * 2 and len({p.parts[-5] for p in runs}) >= 4
     report = (out / "MULTIVERSE.md").read_text()
     assert "literal protocol" in report and "## Cost" in report
-    again = ebrl(*args)
+    again = ebrl_here(*args)
     assert again.returncode == 0, again.stderr
     assert {p: p.stat().st_mtime_ns for p in out.glob("runs/*/*/*/seed_*/run.json")} == stamps
     sessions = json.loads((out / "timing.json").read_text())
@@ -292,9 +292,9 @@ def test_a_tiny_design_runs_and_resumes_without_redoing_work(tmp_path):
     # for bit
     d, universes = multiverse.universes(multiverse.factors(), 2)
     for universe, protocol in ((universes[0], "literal"), (universes[-1], "adopted")):
-        assert ebrl("run", "--protocol", protocol, "--seeds", "0-1", "--steps", "300",
-                    "--workers", "2", "--no-progress", "--out", tmp_path / protocol,
-                    check=True).returncode == 0
+        assert ebrl_here("run", "--protocol", protocol, "--seeds", "0-1", "--steps", "300",
+                         "--workers", "2", "--no-progress", "--out", tmp_path / protocol,
+                         check=True).returncode == 0
         for robot in PAPER_ROBOTS:
             for condition in ("random", "avoidance"):
                 root = multiverse.root_of(out, execution.RunSpec(

@@ -22,8 +22,8 @@ TABLE1 = {"recall_size": 7, "alpha": 0.5, "exploration_rate": 0.05, "discount": 
 @pytest.fixture(scope="module")
 def records(tmp_path_factory):
     out = tmp_path_factory.mktemp("p7") / "results"
-    helpers.ebrl("run", "--robot", "paper", "--condition", "all", "--seeds", "0",
-                 "--steps", "50", "--workers", "1", "--no-progress", "--out", out, check=True)
+    helpers.ebrl_here("run", "--robot", "paper", "--condition", "all", "--seeds", "0",
+                      "--steps", "50", "--workers", "1", "--no-progress", "--out", out, check=True)
     return {(p.parts[-4], p.parts[-3]): json.loads(p.read_text())["parameters"]
             for p in out.glob("*/*/seed_*/run.json")}
 

@@ -11,6 +11,7 @@ from experiments.running import provenance
 from tasks.protocols import PROTOCOL_VERSION
 
 ebrl = functools.partial(helpers.ebrl, check=True)
+here = functools.partial(helpers.ebrl_here, check=True)  # the same command in this process
 SHORT = ["--robot", "two_wheel", "--condition", "random", "--steps", "300", "--workers", "1",
          "--no-progress"]
 
@@ -27,7 +28,7 @@ def test_seed_ranges_and_the_digest():
 @pytest.fixture(scope="module")
 def made(tmp_path_factory):
     out = tmp_path_factory.mktemp("prov") / "results"
-    ebrl("run", *SHORT, "--seeds", "0-1", "--out", out)
+    here("run", *SHORT, "--seeds", "0-1", "--out", out)
     return out
 
 
@@ -71,7 +72,7 @@ def test_report_refuses_to_pool_other_parameters_in_one_line(made, tmp_path):
     assert "different parameters (agent.policy_threshold)" in lines[0]
     assert (out / "two_wheel/random/seed_002/run.json").exists()  # the run is kept
     assert (out / "summary.json").read_bytes() == before  # no summary of the mix
-    proc = ebrl("report", out, check=False)
+    proc = here("report", out, check=False)
     assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1
 
 
@@ -83,7 +84,7 @@ def test_report_refuses_to_pool_other_protocol_versions(made, tmp_path):
     run = json.loads(path.read_text())
     run["parameters"]["protocol_version"] = PROTOCOL_VERSION - 1  # an older run
     path.write_text(json.dumps(run))
-    proc = ebrl("report", out, check=False)
+    proc = here("report", out, check=False)
     assert proc.returncode == 2
     assert proc.stderr.strip() == (
         f"ebrl: error: two_wheel/random: seeds 0 and 1 were made under different protocol "

@@ -122,8 +122,8 @@ def test_a_robot_file_outside_the_package_loads_and_runs(tmp_path):
     assert ours.physics.robot_pose() == theirs.physics.robot_pose()
     ours.close(), theirs.close()
     out = tmp_path / "results"
-    proc = ebrl("run", "--robot", path, "--drive", "two_wheel", "--condition", "avoidance",
-                "--seeds", "0", "--steps", "200", "--workers", "1", "--no-progress", "--out", out)
+    proc = ebrl_here("run", "--robot", path, "--drive", "two_wheel", "--condition", "avoidance",
+                     "--seeds", "0", "--steps", "200", "--workers", "1", "--no-progress", "--out", out)
     assert proc.returncode == 0, proc.stderr
     assert (out / "my_two_wheel" / "avoidance" / "seed_000" / "run.json").is_file()
     assert "my_two_wheel" in (out / "REPORT.md").read_text()

@@ -80,8 +80,8 @@ def test_intrinsic_parameters_reach_the_fallback():
 @pytest.mark.parametrize("agent", ["qtable", "mfec"])
 def test_run_with_another_learner(tmp_path, agent):
     out = tmp_path / "results"
-    proc = ebrl("run", "--agent", agent, "--robot", "paper", "--seeds", "0", "--steps", "300",
-                "--workers", "1", "--no-progress", "--out", out)
+    proc = ebrl_here("run", "--agent", agent, "--robot", "paper", "--seeds", "0", "--steps", "300",
+                     "--workers", "1", "--no-progress", "--out", out)
     assert proc.returncode == 0, proc.stderr
     for robot in ("two_wheel", "floating"):
         run = out / f"{robot}.{agent}" / "avoidance" / "seed_000"
