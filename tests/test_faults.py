@@ -250,7 +250,7 @@ def test_a_lost_ray_cluster_is_one_line_and_keeps_the_finished_runs(clean, tmp_p
         proc = subprocess.Popen(
             [sys.executable, "-m", "experiments", "run", *longer, "--backend", "ray", "--out",
              str(out)], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-            env=dict(env(), RAY_ADDRESS=doomed.address))
+            env=dict(env(EBRL_TEST_CLUSTER_TIMEOUT="3"), RAY_ADDRESS=doomed.address))
         # The cluster dies once the first run is written (a machine busy with other jobs
         # may take minutes to start Ray and finish one run: the deadline only bounds a hang).
         deadline = time.time() + 600

@@ -26,7 +26,9 @@ reads address 0) or with ":SIGKILL" (any signal's name) be killed, once the run 
 computed. EBRL_TEST_HOLD=PATH makes every run, before it starts, announce itself (an
 empty file PATH.NODE.ROBOT_CONDITION_seed_NNN, NODE the Ray node's id or "local") and
 wait while PATH exists, so a test can take a Ray node away, or add one, with runs in
-flight. They exist for the tests of failure handling and are never set otherwise.
+flight; EBRL_TEST_CLUSTER_TIMEOUT=SECONDS replaces CLUSTER_TIMEOUT (a lost cluster's test
+then waits 3 s, not 10). They exist for the tests of failure handling and are never set
+otherwise.
 """
 import collections
 import dataclasses
@@ -44,6 +46,7 @@ from experiments.running import execution, results
 _SINGLE_THREAD = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
                                    "MKL_NUM_THREADS")}
 TEST_FAIL, TEST_CRASH, TEST_HOLD = "EBRL_TEST_FAIL", "EBRL_TEST_CRASH", "EBRL_TEST_HOLD"
+TEST_CLUSTER_TIMEOUT = "EBRL_TEST_CLUSTER_TIMEOUT"
 
 #: What run() did: runs made now, runs already on disk, and (spec, error) per failed run.
 Ran = collections.namedtuple("Ran", "made on_disk failed")
@@ -453,6 +456,7 @@ class _Watch:
     def __init__(self, gcs):
         self.gcs, self.written, self.lost = gcs, 0, False
         self.answered = time.monotonic()
+        self.timeout = float(os.environ.get(TEST_CLUSTER_TIMEOUT) or CLUSTER_TIMEOUT)
 
     def check(self):
         """Raises ClusterLost once the cluster has not answered since .answered for
@@ -460,11 +464,11 @@ class _Watch:
         if _answers(self.gcs):
             self.answered = time.monotonic()
             return
-        if time.monotonic() - self.answered < CLUSTER_TIMEOUT:
+        if time.monotonic() - self.answered < self.timeout:
             return
         self.lost = True
         raise ClusterLost(f"lost the connection to the Ray cluster at {self.gcs} (no answer "
-                          f"for {CLUSTER_TIMEOUT:.0f} s); the {self.written} runs written are "
+                          f"for {self.timeout:.0f} s); the {self.written} runs written are "
                           "on disk; rerun the same command when the cluster is back")
 
 
