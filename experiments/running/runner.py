@@ -281,11 +281,14 @@ def _context():
     worker is forked from one server process per command that has imported PRELOAD, where
     a spawned worker starts a fresh interpreter and imports them itself (0.56 s of CPU a
     worker; a worker then loads its kernels from numba's cache, about 0.5 s, either way).
-    Measured: a 12-run `ebrl run` with two workers, 4.3 s of CPU with spawn, 3.6 s with
-    the forkserver; a study that makes a pool per batch saves it at every batch. The server
+    Measured (the machine's CPU, /proc/stat): a 12-run `ebrl run` with two workers, 4.3 s
+    with spawn, 3.6 s with the forkserver; a study, which makes a pool per batch, saves it
+    at every batch. The server
     is started from _submit, SIGINT ignored, so its workers ignore SIGINT as spawned ones
-    did. The workers are the server's children, not the command's (tests/helpers.py
-    pool_workers finds them)."""
+    did. The server lives as long as the process that started it, and its workers get the
+    environment it had then (with _SINGLE_THREAD): a variable set later in the same
+    process reaches no worker. The workers are the server's children, not the command's
+    (experiments.checks.procs.pool_workers finds them)."""
     import multiprocessing
     if "forkserver" not in multiprocessing.get_all_start_methods():
         return multiprocessing.get_context("spawn")
