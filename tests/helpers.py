@@ -30,7 +30,7 @@ def ebrl_here(*args, cwd=ROOT, check=False):
     their input before any work, and for whole commands whose process is neither killed
     nor given other environment variables (the test-only hooks): their runs are made in
     the pool's worker processes as ever, forked from the one forkserver this pytest
-    worker starts (experiments.running.runner._context), without a second of imports per
+    worker starts (experiments.running.pool.context), without a second of imports per
     command. What is written to the file descriptors by native code is not captured. A
     traceback propagates as the exception it is. check as ebrl's."""
     from experiments.cli import main

@@ -273,7 +273,7 @@ def test_a_failed_run_is_recorded_named_never_averaged_and_retried(clean_run, tm
     assert record["status"] == "failed"
     assert record["parameters"]["seed"] == 1 and record["parameters"]["steps"] == 400
     assert record["error"].startswith("PhysicsError: ") and "\n" not in record["error"]
-    assert "PhysicsError" in record["traceback"] and "_execute" in record["traceback"]
+    assert "PhysicsError" in record["traceback"] and "running/worker.py\", line" in record["traceback"]
     # The other runs finished, identical to the clean run's.
     others = {k: v for k, v in arrays(clean_run).items() if k != failing}
     assert {k: v for k, v in arrays(out).items() if k != failing} == others

@@ -29,7 +29,7 @@ def alive(pid):
 
 def pool_workers(pid):
     """The live worker processes of the local pool of the command at pid, as pid -> command
-    line: the children of its forkserver (experiments.running.runner._context), or its
+    line: the children of its forkserver (experiments.running.pool.context), or its
     spawned children where the platform has no forkserver."""
     mine = children(pid)
     servers = [p for p, cmd in mine.items() if b"multiprocessing.forkserver" in cmd]

@@ -159,7 +159,7 @@ def write_failure(root, spec, error):
     line = error_line(error)
     record = {"status": "failed", "parameters": spec.parameters(), "error": line,
               "traceback": "".join(traceback.format_exception(error))}
-    for key in ("signal", "exit_status"):  # a worker process that died (runner.WorkerDied)
+    for key in ("signal", "exit_status"):  # a worker process that died (worker.WorkerDied)
         if getattr(error, key, None) is not None:
             record[key] = getattr(error, key)
     atomic_write(run_dir(root, spec) / "run.json", dumps(record))
