@@ -12,7 +12,6 @@ import time
 
 from experiments.running import results, worker
 
-
 TEST_CLUSTER_TIMEOUT = "EBRL_TEST_CLUSTER_TIMEOUT"
 
 
@@ -128,7 +127,7 @@ def _record_ray(ray, ref, spec, done, watch):
         if not isinstance(e, died):
             raise
         done(spec, error=worker.WorkerDied(f"the Ray worker running {spec.name} died "
-                                    f"({results.error_line(e, 200)})"))
+                                           f"({results.error_line(e, 200)})"))
     else:
         done(spec, result)
 
