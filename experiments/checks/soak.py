@@ -23,7 +23,7 @@ import time
 
 from experiments.checks import procs
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]  # the checkout: `python -m experiments` from there
 
 
 def _workers_of(pid, min_cpu):
