@@ -5,7 +5,7 @@ import pytest
 
 from helpers import ebrl, ebrl_here
 
-#: The slow tier (pyproject.toml's markers): real `ebrl ablate` and `ebrl run` processes.
+#: The slow tier (pyproject.toml's markers): whole `ebrl ablate` and `ebrl run` commands (one a real process).
 pytestmark = pytest.mark.slow
 
 
