@@ -1,4 +1,6 @@
-"""The protocol pipeline end to end, through the real command in real processes."""
+"""The protocol pipeline end to end, through the real command: in real processes where it
+is killed, interrupted or given a test hook, else in the pytest worker (helpers.ebrl_here),
+its runs on the pool's worker processes either way."""
 import functools
 import json
 import os

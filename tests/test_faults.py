@@ -1,4 +1,5 @@
-"""Faults through the real command in real processes: a worker that crashes (whatever
+"""Faults through the real command (in real processes where it is killed, crashed or given
+a test hook; reruns in the pytest worker, helpers.ebrl_here): a worker that crashes (whatever
 --workers), Ray's failures and a lost cluster, a results folder that fills up or turns
 read-only. Each ends in one line, keeps every finished run, and a rerun finishes the set
 with the clean run's summary."""
