@@ -108,3 +108,20 @@ def test_the_results_prose_quotes_only_numbers_of_the_generated_blocks():
         for number in re.findall(r"\d[\d,]*(?:\.\d+)?", prose):
             if len(number.replace(",", "").replace(".", "")) >= 2:
                 assert number in generated, f"RESULTS.md, {heading}: {number} is typed, not generated"
+
+
+def test_a_history_page_shows_its_own_figures():
+    """`ebrl report --results` rewrites docs/figures/ under the current protocol, so a page of
+    docs/history/ embeds its own copies (docs/history/figures/), never docs/figures/; and
+    every image a page embeds exists."""
+    import re
+    pages = [ROOT / "RESULTS.md", ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
+    for page in pages:
+        for target in re.findall(r"!\[[^\]]*\]\(([^)\s]+)\)", page.read_text()):
+            if "://" in target:
+                continue
+            path = (page.parent / target).resolve()
+            assert path.is_file(), f"{page.relative_to(ROOT)}: no image at {target}"
+            if "history" in page.relative_to(ROOT).parts:
+                assert (ROOT / "docs" / "history") in path.parents, \
+                    f"{page.relative_to(ROOT)} shows {target}, which ebrl report rewrites"
