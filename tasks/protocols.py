@@ -23,14 +23,16 @@ import dataclasses
 from types import MappingProxyType
 
 #: Bump when a change alters what a run computes, so stale results are not reused.
-#: 7: issue 48's rules kept whole (every random action Section 3.4's Gaussian; one
+#: 8: issue 56's body (a two-wheel move ends where the body first touches the room and
+#: its rest is turned, Section 3.3, on every two-wheel realisation; blocked_move "stop"
+#: in every protocol); 7: issue 48's rules kept whole (every random action Section 3.4's Gaussian; one
 #: fallback, the 20% replacing; the planar two-wheel body: radius 1.5, a blocked move
 #: refused, the commanded turn; fitted on seeds 7000-7099); 6: issue 37's rules (the 20%
 #: random action Section 3.4's Gaussian, one learner for both robots: policy threshold
 #: 0.3, initial reliability 1); 5: stage 1's readings, eq 2-4 by reciprocals; 4: the
 #: adopted readings per drive, diff_drive's Euler; 3: float64 similarity (CHANGELOG.md:
 #: each version, its commit).
-PROTOCOL_VERSION = 7
+PROTOCOL_VERSION = 8
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -77,7 +79,7 @@ LEARNER = (("policy_threshold", 0.3),)
 #: the fit, on seeds 7000-7099's first trials).
 FALLBACK = (("random_demand", "gaussian"), ("random_in_avoidance", "replace"))
 
-#: Protocol 7 (docs/interpretation.md, "The adopted readings (protocol 7)").
+#: Protocol 8 (docs/interpretation.md, "The adopted readings (protocol 8)").
 ADOPTED = Protocol(
     "adopted", PROTOCOL_VERSION,
     readings=LEARNER + FALLBACK,
@@ -97,12 +99,11 @@ ADOPTED = Protocol(
                      ("velocity_noise", 0.06931187891441754), ("velocity_code", "code")),
     }),
     robots=MappingProxyType({
-        # Protocol 7's body: the file's radius, 1.5 units (literal; given as the number the
-        # fit's runs used), the leftover turn the commanded way (literal), and a blocked
-        # move refused whole (chosen by protocol 7's first-trial fit on seeds 7000-7099:
-        # this body slides along walls when stopped, Section 3.3's robot does not;
-        # docs/interpretation.md, "Why our two-wheel random walk reached the goal sooner")
-        "two_wheel": (("radius", 1.5), ("blocked_move", "refuse"), ("leftover_turn", "commanded")),
+        # Protocol 8's body: a blocked move stops where the body touches and turns the
+        # rest (stated, Section 3.3); its open values, the radius and the leftover turn's
+        # way, by protocol 8's first-trial fit (docs/interpretation.md, "Protocol 8: the
+        # plan, written before its fit")
+        "two_wheel": (("radius", 1.5), ("blocked_move", "stop"), ("leftover_turn", "commanded")),
         # stage 1's body (trial 9): the literal wall ("moves ... until it bumps": stopped
         # at the bump), a larger puck than its file's 1.5
         "floating": (("bump", "stop"), ("radius", 2.477124155927907)),

@@ -11,6 +11,9 @@ realisation says how a body turns and moves (tasks.realisations: servos, wheels,
 wheel_motors, joint_motors, gait). This module is the family's task: its constants and
 each episode's settings.
 """
+import mujoco
+import numpy as np
+
 from tasks import navigation
 from tasks.readings import BY_NAME
 
@@ -25,6 +28,20 @@ MOVE_SECONDS = 0.4
 BLOCKED_TOLERANCE = 0.1
 
 
+def touch_pairs(model, base):
+    """The pairs (robot geom, room geom) that can touch, as an (n, 2) int32 array: every
+    geom of the robot (the tree under its base body) with every geom of the room that
+    MuJoCo's contype/conaffinity let it collide with, the floor excepted (model: an
+    MjModel)."""
+    root = model.body_rootid[base]
+    mine = model.body_rootid[model.geom_bodyid] == root
+    floor = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "floor")
+    kind, affinity = model.geom_contype, model.geom_conaffinity
+    pairs = [(g, w) for g in np.flatnonzero(mine) for w in np.flatnonzero(~mine)
+             if w != floor and (kind[g] & affinity[w] or kind[w] & affinity[g])]
+    return np.array(pairs, dtype=np.int32).reshape(-1, 2)
+
+
 class TwoWheel(navigation.Navigation):
     """The two-wheel action family on a wheeled body: a turn phase and a move phase of
     fixed seconds, whose substeps the episode fixes (the gait's task,
@@ -35,14 +52,15 @@ class TwoWheel(navigation.Navigation):
     def family_settings(self, physics):
         """The family's part of a record (tasks.kernels.two_wheel.FAMILY_FIELDS) but its
         phases' substeps: its constants, the task config's readings (as their codes),
-        room for the state a refused move returns to."""
-        import numpy as np
+        room for the state a refused move returns to, and the geom pairs that tell where a
+        move touches the room."""
         m = physics.model
         config = self.config
         return dict(max_turn=MAX_TURN, max_move=MAX_MOVE, tolerance=BLOCKED_TOLERANCE,
                     blocked_move=BY_NAME["blocked_move"].code(config.blocked_move),
                     leftover_turn=BY_NAME["leftover_turn"].code(config.leftover_turn),
-                    qpos0=np.empty(m.nq), qvel0=np.empty(m.nv), act0=np.empty(m.na))
+                    qpos0=np.empty(m.nq), qvel0=np.empty(m.nv), act0=np.empty(m.na),
+                    pairs=touch_pairs(m.ptr, physics.body["base"]), fromto=np.empty(6))
 
     def drive_settings(self, physics):
         dt = physics.timestep
