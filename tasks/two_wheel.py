@@ -1,15 +1,16 @@
 """The two-wheel drive (Unemi 2000, Section 3.3): turn, then move, in one agent step.
 
 Action a in [-1, 1]: turn |a| rad (a < 0 left, counter-clockwise; a > 0 right),
-then move 2 (1 - |a|) units forward. When a collision stops the move, the rest
-of it becomes turn in the same direction as the commanded turn (right when a = 0),
-at the action's own rate of 1 rad per 2 units. Each part is scaled by noise. The
-readings `blocked_move` ("refuse": the blocked move is undone and all of it turned)
-and `leftover_turn` ("away": the rest turns away from the nearer side) change that
-(tasks/readings.py). The step itself is tasks.kernels.two_wheel.act, written once; a
-realisation says how a body turns and moves (tasks.realisations: servos, wheels,
-wheel_motors, joint_motors, gait). This module is the family's task: its constants and
-each episode's settings.
+then move 2 (1 - |a|) units forward. When a collision stops the move (the body touches
+a wall or an obstacle: the move ends there), the rest of it becomes turn in the same
+direction as the commanded turn (right when a = 0), at the action's own rate of 1 rad
+per 2 units. Each part is scaled by noise. The reading `leftover_turn` ("away": the rest
+turns away from the nearer side) changes the turn's way; `blocked_move` "refuse" (the
+move undone, all of it turned: protocol 7's, no reading of Section 3.3) remakes protocol
+7's runs (tasks/readings.py). The step itself is tasks.kernels.two_wheel.act, written
+once; a realisation says how a body turns and moves (tasks.realisations: servos, wheels,
+wheel_motors, joint_motors, gait). This module is the family's task: its constants, the
+geom pairs a move watches (`touch_pairs`) and each episode's settings.
 """
 import mujoco
 import numpy as np

@@ -447,7 +447,9 @@ def test_a_refused_move_of_the_car_returns_its_wheel_targets_too():
         substeps = physics.substeps
         env.step([0.0])
         x1, y1, _ = physics.robot_pose()
-        assert physics.substeps - substeps == 400   # turn, move, the whole move turned
+        # the turn and the leftover turn (100 substeps each), the move ended at the touch,
+        # short of its 200
+        assert 200 < physics.substeps - substeps < 400
         assert math.hypot(x1 - x0, y1 - y0) < 2 * 0.875 and x1 > x0 - 0.1
     finally:
         env.close()
