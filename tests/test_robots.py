@@ -274,11 +274,11 @@ def test_a_drives_readings_reach_its_robots_runs_and_set_overrides_them():
         (agent.random_demand, agent.random_in_avoidance)
     assert (two.task_config().leftover_turn, two.task_config().radius) == ("away", None)
     assert two.task_config().action_noise == 0.05
-    # The planar two-wheel robot's own body (protocol 7): the file's radius, a blocked move
-    # refused, the commanded leftover turn, over its drive's.
+    # The planar two-wheel robot's own body (protocol 8): the file's radius, the blocked move
+    # stopped at the touch (stated), the commanded leftover turn, over its drive's.
     planar = execution.RunSpec("two_wheel", "random", 0, 10).task_config()
     assert (planar.radius, planar.blocked_move, planar.leftover_turn) == \
-        (1.5, "refuse", "commanded")
+        (1.5, "stop", "commanded")
     assert two.task_config().blocked_move == "stop"
     over = execution.RunSpec("floating", "avoidance", 0, 10,
                             (("bump", "grip"), ("policy_threshold", 0.1)))
