@@ -46,7 +46,7 @@ RHO, RHO_SENSITIVITY = 0.0, 0.5
 POWER_DRAWS, POWER_SEED = 4000, 200_008
 #: The normal distribution's 97.5% point: a 95% interval's half width in standard errors.
 Z975 = float(special.ndtri(0.975))
-#: The four verdicts of a test against the paper, and what an undecided one is not.
+#: The four verdicts of a figure or a shrink against the paper (`verdict`).
 VERDICTS = ("equivalent", "different", "equivalent and different", "undecided")
 #: The three families of tests whose p values are Holm-adjusted together.
 FAMILIES = {"difference": "different from the paper: the figures, the shrinks, C5 and C6",
