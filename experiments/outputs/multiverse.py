@@ -2,20 +2,25 @@
 intervals (its table, multiverse.csv), and across the universes each claim's share and
 each factor's effects on it.
 
-The claims are Section 3.6's ten, as `ebrl report` judges them (experiments.outputs.
-report.claims: the same verdicts, tests/test_multiverse.py), each with a statistic and a
-95% interval, numbered as RESULTS.md numbers them:
+The claims are Section 3.6's ten, as `ebrl report` judges them (each by the test of
+experiments.outputs.verdicts' claim_tests, at its raw p: the same verdicts,
+tests/test_multiverse.py), each with a statistic and a 95% interval, numbered as RESULTS.md
+numbers them:
 
 - C1, C2, C7, C8 (avoidance cuts first-trial steps, steps per trial): the random walk's
-  mean over the avoidance mean; holds when above 1. The interval resamples seeds, the
-  same seeds for both conditions (a seed gives both conditions the same streams).
+  mean over the avoidance mean; holds when the one-sided Welch test of the random walk's
+  mean above the avoidance mean rejects (verdicts.cut_p). The interval resamples seeds,
+  the same seeds for both conditions (a seed gives both conditions the same streams).
 - C3, C4, C9, C10 (learning shrinks trials): the shrink and its interval
-  (results.summarize); holds when the interval lies below 1.
+  (results.summarize); holds when the one-sided z test of its log below 0 rejects
+  (verdicts.shrinks_p).
 - C5 (most two-wheel random walks reach fewer than 30 goals in 30,000 steps): the share
-  of runs below 30 goals, Wilson's interval; holds above a half.
+  of runs below 30 goals, Wilson's interval; holds when the one-sided binomial test
+  against a half rejects (verdicts.most_p).
 - C6 (every two-wheel avoidance run reaches at least 49 goals): the fewest goals, a
-  percentile bootstrap of the minimum; holds at 49 or more. C5 and C6 are judged at the
-  paper's budget only.
+  percentile bootstrap of the minimum; holds unless the rank test shows more of our runs
+  below 49 than one distribution gives (verdicts.rank_below). C5 and C6 are judged at
+  the paper's budget only.
 
 A factor's main effect on a claim is estimated by least squares on the design's ±1
 columns (main effects and, where the universes run allow it, every two-factor
@@ -32,7 +37,7 @@ import warnings
 import numpy as np
 
 from experiments import paper
-from experiments.outputs import report
+from experiments.outputs import report, verdicts
 from experiments.running import results
 from tasks.robots import DRIVES
 
@@ -133,11 +138,13 @@ def claim_values(runs, summary):
         if c.kind == "ratio":
             metric = "first_trial_steps" if "first" in c.what else "steps_per_trial"
             value, ci = _paired_ratio(runs, c.robot, metric, rng)
-            holds = None if value is None else value > c.bar
+            p = verdicts.cut_p(groups[(c.robot, "random")], groups[(c.robot, "avoidance")],
+                               metric)
+            holds = None if value is None else _rejects(p)
         elif c.kind == "shrink":
             g = groups[(c.robot, c.what.split(":")[0])]
             value, ci = g["shrink"], g["shrink_ci95"]
-            holds = None if value is None else (ci[1] < 1.0 if ci else value < 1.0)
+            holds = None if value is None else _rejects(verdicts.shrinks_p(g))
         else:
             cond = "random" if c.kind == "share" else "avoidance"
             g = groups[(c.robot, cond)]
@@ -145,14 +152,21 @@ def claim_values(runs, summary):
                 _, goals = _per_seed(runs, c.robot, cond, "goals")
                 if c.kind == "share":
                     k = int(np.sum(goals < 30))
-                    value, ci, holds = k / len(goals), wilson(k, len(goals)), k > len(goals) / 2
+                    value, ci = k / len(goals), wilson(k, len(goals))
+                    holds = _rejects(verdicts.most_p(k, len(goals)))
                 else:
                     idx = rng.integers(0, len(goals), size=(BOOTSTRAP, len(goals)))
                     value = float(goals.min())
                     ci = [float(x) for x in np.percentile(goals[idx].min(axis=1), [2.5, 97.5])]
-                    holds = value >= c.bar
+                    holds = not _rejects(verdicts.rank_below(int(np.sum(goals < c.bar)),
+                                                             len(goals)))
         out[c.key] = {"value": value, "ci": ci, "holds": holds}
     return out
+
+
+def _rejects(p):
+    """Whether a claim's test rejects at verdicts.ALPHA (a test that cannot be made does not)."""
+    return p is not None and p < verdicts.ALPHA
 
 
 def figure_values(summary):
