@@ -82,9 +82,9 @@ def test_sensors_once_per_step_read_as_sensors_every_substep():
 @pytest.mark.slow
 def test_planar_trajectories_unchanged_by_the_registry():
     """The first 3,000 steps of seeds 0-1, every paper robot and condition, as the full
-    run behind RESULTS.md made them (tests/data/planar_traces_v<PROTOCOL_VERSION>.npz,
-    cut from protocol 5's clean-clone run; protocol 5's readings and eq 2-4's reciprocals
-    changed every run). Bit for bit on one kind of machine: numpy's BLAS and math kernels
+    run behind RESULTS.md made them (tests/data/planar_traces_v<PROTOCOL_VERSION>.npz, made by
+    tests/data/make_golden.py at the protocol's code: a run's first steps are the same
+    whatever its budget). Bit for bit on one kind of machine: numpy's BLAS and math kernels
     round the last bit per CPU (same code, same seeds), so on another kind a run may part
     from these by a hundredth of a unit after some thousands of steps. Made again, or
     checked, by tests/data/make_golden.py."""
