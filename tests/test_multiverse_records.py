@@ -166,6 +166,18 @@ def test_a_study_resumes_from_its_records_on_a_fresh_folder(tmp_path):
     shards = sorted((fresh / "records").iterdir())
     assert ebrl_here("multiverse", "--universes", "3", *TINY, "--out", fresh).returncode == 0
     assert sorted((fresh / "records").iterdir()) == shards
+    # run folders without records (made before records were kept, or killed between the
+    # two) give their records: no run made
+    shutil.rmtree(whole / "records")
+    assert ebrl_here("multiverse", "--universes", "3", *TINY, "--out", whole).returncode == 0
+    rebuilt = records.Store(whole / "records", ident)
+    def made(record):  # what a run made, not when or in how long
+        return {k: v for k, v in record.items() if k not in ("at", "seconds")}
+
+    assert {k: made(r) for k, r in rebuilt.runs.items()} == \
+        {k: made(r) for k, r in store.runs.items()}
+    assert [s["runs_made"] for s in rebuilt.timing()] == [0]
+    assert (whole / "multiverse.csv").read_bytes() == table
     # the report from the records alone (a fresh clone's committed records), no run made
     proc = ebrl_here("multiverse", "--universes", "3", "--seeds", "0-1", "--steps", "1500",
                      "--report-only", "--records", fresh / "records", "--out", tmp_path / "r")

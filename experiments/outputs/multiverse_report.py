@@ -347,9 +347,10 @@ def protocols_text(universes, factor_list):
             up.append(f"`{f.key}`" + ("" if len(robots) == len(PAPER_ROBOTS)
                                       else f" (the {', '.join(robots)} robot's)"))
     where = (f"the design's row {current.row + 1} ({current.name})" if current.row is not None
-             else f"`{current.name}`, run beside the design (no row of it is: its levels "
-                  "differ between the robots, or it gives a reading the number the plain level "
-                  "leaves to the robot file, which need not run the same bits)")
+             else f"`{current.name}`, run beside the design (no row of the design gives "
+                  "its readings: its levels may differ between the robots, and a value it "
+                  "gives as a number, as the two-wheel radius 1.5, the plain level leaves to "
+                  "the robot file, which need not run the same bits)")
     return (("The literal protocol (`ebrl run --protocol literal`) is u001, every factor "
              "plain. " if literal is not None else "")
             + f"The current protocol (`ebrl run`, the adopted readings of protocol "
