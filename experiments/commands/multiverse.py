@@ -92,10 +92,9 @@ def _bench(out, measure):
 def _records(args, chosen, universes):
     """(the records folder, the plan's specs, its Store, {spec: record} of the recorded
     ones): every record file read and checked against this call (RecordsError)."""
-    from experiments.studies import multiverse
-    from experiments.studies import multiverse_records as mr
+    from experiments.studies import multiverse, multiverse_records
     folder = args.records if args.records is not None else args.out / "records"
-    store = mr.Store(folder, mr.identity(chosen, args.steps))
+    store = multiverse_records.Store(folder, multiverse_records.identity(chosen, args.steps))
     specs = multiverse.plan(universes, args.seeds, args.steps)
     return folder, specs, store, store.match(specs)
 
@@ -113,10 +112,10 @@ def _make(args, chosen, specs, made, folder):
     runner.Ran."""
     from experiments.running import results
     from experiments.studies import multiverse
-    from experiments.studies import multiverse_records as mr
-    writer = mr.Writer(folder, mr.identity(chosen, args.steps), _levels(chosen), args.workers,
-                       args.backend)
-    mr.seal_left(folder)
+    from experiments.studies import multiverse_records as kept
+    writer = kept.Writer(folder, kept.identity(chosen, args.steps), _levels(chosen),
+                         args.workers, args.backend)
+    kept.seal_left(folder)
 
     def keep(spec, record):
         writer.add(record)
@@ -129,12 +128,12 @@ def _make(args, chosen, specs, made, folder):
             root = multiverse.root_of(args.out, spec)
             if results.existing(root, spec) == "done":
                 run = results.read_run_json(results.run_dir(root, spec) / "run.json")
-                record = mr.from_folder(root, spec, run)
+                record = kept.from_folder(root, spec, run)
                 keep(spec, dict(record, at=round(writer.at(), 1)))
         ran = multiverse.run(
             args.out, [s for s in todo if s not in made], args.workers, args.backend,
             not args.no_progress,
-            written=lambda spec, run, result: keep(spec, mr.record_of(
+            written=lambda spec, run, result: keep(spec, kept.record_of(
                 spec, result["trial_ends"], result["memory_decisions"], result["seconds"],
                 writer.at())))
     finally:  # Ctrl-C, a kill, a lost cluster: the records so far are sealed, kept

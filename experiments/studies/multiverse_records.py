@@ -26,7 +26,7 @@ process. Each other line is a run (record_of):
 and a sealed session's last line is {"end": ...}: its wall time, runs made, workers,
 backend, and whether it was stopped. A run is what the analysis and a resume need: its
 trials (every figure: the first trial, steps per trial both ways, the shrink, the
-goals) and its digest; no traces (about 100 bytes a run gzipped: docs/data/multiverse/
+goals) and its digest; no traces (100-350 bytes a run gzipped: docs/data/multiverse/
 README.md).
 """
 import gzip
