@@ -84,7 +84,8 @@ def _check(args):
                          "--seeds or --promote-seeds)")
     if args.trial is not None and args.validate is None:
         raise ValueError("--trial chooses the trial --validate runs; give --validate too")
-    arguments.check_results(args)
+    from experiments.studies import fit
+    arguments.check_results(args, (fit.FIT_BEGIN, fit.FIT_END))
     return names, study_storage(args)
 
 

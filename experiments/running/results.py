@@ -192,6 +192,27 @@ def read_run_json(path):
         raise DamagedRun(path.parent, str(e)) from None
 
 
+class DamagedFile(ResultsError):
+    """A file the tool wrote and reads back (summary.json, a study's timing.json or
+    bench.json) that cannot be read or is not of its kind's shape: the message names the
+    file and what is wrong (schema.read_json)."""
+
+
+def read_file(path, check):
+    """The JSON file at path checked by check (schema.check_summary, check_timing,
+    check_bench): the one reader of the files the tool reads back; DamagedFile naming
+    the file when it cannot be read or is not of its shape."""
+    try:
+        return schema.read_json(path, check)
+    except schema.Damaged as e:
+        raise DamagedFile(str(e)) from None
+
+
+def read_summary(path):
+    """A summary.json (ebrl report's), checked (schema.check_summary); DamagedFile if not."""
+    return read_file(path, schema.check_summary)
+
+
 def read_run(folder, root=None):
     """The run record of a run folder, every file of it checked: run.json's schema, and
     for a complete run trace.npz, trials.csv and config.json readable and agreeing with
