@@ -2,7 +2,6 @@
 readings (experiments.studies.multiverse), then MULTIVERSE.md, multiverse.csv and a
 specification curve per claim (experiments.outputs.multiverse, multiverse_report)."""
 import datetime
-import json
 import pathlib
 import time
 
@@ -65,9 +64,9 @@ def _check(args):
 def _timing(out, started, seconds, ran, args):
     """OUT/timing.json: every call's wall time and runs (ran: runner.Ran; None for a call
     stopped before its runs were done), appended."""
-    from experiments.running import results
+    from experiments.running import results, schema
     path = out / "timing.json"
-    sessions = json.loads(path.read_text()) if path.exists() else []
+    sessions = results.read_bookkeeping(path, schema.check_timing) or []
     counts = ({"interrupted": True} if ran is None else
               {"runs_made": ran.made, "on_disk": ran.on_disk, "failed": len(ran.failed)})
     sessions.append({"started": started, "seconds": round(seconds, 1), **counts,
@@ -78,16 +77,19 @@ def _timing(out, started, seconds, ran, args):
 
 def _bench(out, measure):
     """OUT/bench.json: ebrl bench's measure per paper robot, made now (measure) or before."""
-    from experiments.running import results
+    import functools
+
+    from experiments.running import results, schema
     from tasks.robots import PAPER_ROBOTS
     path = out / "bench.json"
+    check = functools.partial(schema.check_bench, robots=PAPER_ROBOTS)
     if measure:
         from experiments.checks import bench
         from tasks.kernels.bindings import stage_timers_off
         with stage_timers_off():
             rows = {r: bench.measure(r, 1000, 3) for r in PAPER_ROBOTS}
         results.atomic_write(path, results.dumps(rows))
-    return json.loads(path.read_text()) if path.exists() else None
+    return results.read_bookkeeping(path, check)
 
 
 def _report(args, chosen, design, universes, seconds_made):
@@ -131,9 +133,15 @@ def run(args):
         chosen, (design, universes) = _check(args)
     except ValueError as e:
         return fail(str(e))
-    from experiments.running import results
+    from experiments.running import results, schema
     from experiments.studies import multiverse
+    try:  # what is on disk, before any work: a refusal writes nothing (no timing entry)
+        multiverse.check_on_disk(args.out, universes, args.seeds, args.steps)
+    except results.ResultsError as e:
+        return fail(str(e))
     args.out.mkdir(exist_ok=True)
+    results.read_bookkeeping(args.out / "timing.json", schema.check_timing)  # a damaged
+    _bench(args.out, False)  # timing.json or bench.json is set aside now, named, made again
     started = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
     clock = time.perf_counter()
     try:

@@ -208,6 +208,26 @@ def read_file(path, check):
         raise DamagedFile(str(e)) from None
 
 
+def read_bookkeeping(path, check):
+    """A study folder's bookkeeping file (timing.json, bench.json) read through read_file:
+    its value, or None when there is none; a damaged one is moved aside to
+    PATH.damaged-<time> (schema.move_aside, never deleted) with one warning line naming
+    it, and the caller makes it again."""
+    path = pathlib.Path(path)
+    if not path.exists():
+        return None
+    try:
+        return read_file(path, check)
+    except DamagedFile as e:
+        try:
+            aside = schema.move_aside(path)
+        except OSError as error:
+            raise write_error(path, error) from error
+        warn(f"{e}; moved aside to {aside.name} (kept), the command goes on as if it "
+             "were missing")
+        return None
+
+
 def read_summary(path):
     """A summary.json (ebrl report's), checked (schema.check_summary); DamagedFile if not."""
     return read_file(path, schema.check_summary)

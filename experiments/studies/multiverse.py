@@ -322,6 +322,14 @@ def plan(out, all_universes, seeds, steps=None):
     return sorted(unique, key=lambda s: -s.steps)
 
 
+def check_on_disk(out, all_universes, seeds, steps=None):
+    """ResultsError when a run folder under out holds a run made with other parameters
+    (another --steps, say), found before any work and without writing anything (damaged
+    folders are left for run to set aside)."""
+    runner.pending(functools.partial(root_of, out), plan(out, all_universes, seeds, steps),
+                   mend=False)
+
+
 def run(out, all_universes, seeds, steps=None, workers=None, backend="local", progress=True):
     """Runs what is not on disk (ResultsError first if a folder holds other runs);
     returns runner.Ran."""
