@@ -64,7 +64,7 @@ def check_agent(args, overrides):
     if twice is not None:
         raise ValueError(f"--set {twice} is given more than once")
     validate.agent_configs(selected_robots(args), overrides, args.drive,
-                           getattr(args, "agent", "ebrl"))
+                           getattr(args, "agent", "ebrl"), getattr(args, "steps", None))
     if overrides:  # a task field (radius) against the room's corridors
         check_room(selected_robots(args), getattr(args, "room", None), args.drive, overrides)
 

@@ -124,7 +124,7 @@ FAILURE_KINDS = (
     ("robot", lambda e: e.startswith(("MountError:", "ContractError:")) or "XML Error" in e,
      "the robot file is bad (the error says where): fix it, then RERUN"),
     ("memory", lambda e: e.split(":")[0].endswith("MemoryError"),  # numpy's _ArrayMemoryError
-     "out of memory: RERUN with fewer --workers"),
+     "out of memory: RERUN with fewer --workers, or with smaller --set sizes"),
     ("left the room", lambda e: e.startswith("PhysicsError: the robot left the room"),
      "the robot went through a wall and off the room's floor, which a rerun repeats (same "
      "seed, same computation): its contacts with the walls are too soft or its steps too "
