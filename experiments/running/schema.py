@@ -385,3 +385,24 @@ def move_aside(path):
         aside = path.with_name(f"{path.name}.{DAMAGED_PREFIX}{stamp}-{n}")
     os.replace(path, aside)
     return aside
+
+
+def check_validation(row_keys):
+    """A study's validation file (ebrl fit --validate: validation.json, row_keys value,
+    groups and claims; --stage first-trial: validation_first_trial_<drive>.json, distance
+    and figures): its seeds, its settings and a best and a defaults row of those keys."""
+    def check(v):
+        if not isinstance(v, dict):
+            raise Damaged(f"it holds {_name(v)}, not a validation")
+        seeds = _typed(v, "seeds", "", list, "a list", optional=False)
+        if not seeds or not all(isinstance(s, int) and not isinstance(s, bool) for s in seeds):
+            raise Damaged("seeds is not a list of seeds")
+        _typed(v, "params", "", dict, "an object", optional=False)
+        rows = _typed(v, "rows", "", dict, "an object", optional=False)
+        for name in ("best", "defaults"):
+            row = _typed(rows, name, "rows.", dict, "an object", optional=False)
+            for key in row_keys:
+                if key not in row:
+                    raise Damaged(f"rows.{name}.{key} is missing")
+        return v
+    return check
