@@ -184,8 +184,11 @@ def memory_fits(agent, config, dims, steps, overrides, robot, available=None):
     said = (f"the largest {name} that fits is {largest:,}" if largest is not None else
             f"it does not fit even at {name}={sizes[name]}: lower "
             + ", ".join(n for n in given if n != name))
-    raise ValueError(f"--set {name}={given[name]:,}: the {agent} agent of {robot} would hold "
-                     f"about {_bytes(need)}, more than the {_bytes(available)} of memory "
+    value = given[name]
+    shown = f"{value:,}" if value < 10**18 else f"{str(value)[:3]}... ({len(str(value))} digits)"
+    held = "over 1,000 PB" if need >= 1000 * 2**50 else f"about {_bytes(need)}"
+    raise ValueError(f"--set {name}={shown}: the {agent} agent of {robot} would hold "
+                     f"{held}, more than the {_bytes(available)} of memory "
                      f"available; {said}")
 
 
