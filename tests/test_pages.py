@@ -171,6 +171,32 @@ def test_maze_study_refuses_a_broken_page_before_any_run(tmp_path, text, said):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["RESULTS.md"]
 
 
+def _blocks():
+    from experiments.studies import ablation, evolved, fit
+    return {"ablate": (ablation.ABLATION_BEGIN, ablation.ABLATION_END),
+            "fit": (fit.FIT_BEGIN, fit.FIT_END), "evolve-report": (evolved.BEGIN, evolved.END)}
+
+
+@pytest.mark.parametrize("command", ["ablate", "fit", "evolve-report"])
+def test_every_command_with_results_refuses_a_broken_page_before_any_work(tmp_path, command):
+    begin, end = _blocks()[command]
+    path = tmp_path / "RESULTS.md"
+    path.write_text(f"# mine\n\n{begin}\nmine, after a lone start marker\n")
+    before = path.read_bytes()
+    for name in ("hand", "evolve", "evolved"):
+        (tmp_path / name).mkdir()
+    extra = {"ablate": ["--seeds", "1", "--steps", "5"],
+             "fit": ["--trials", "1", "--figures", "figures"],
+             "evolve-report": ["--hand", "hand", "--evolve", "evolve", "--evolved", "evolved",
+                               "--figures", "figures"]}[command]
+    out = "EVOLVE.md" if command == "evolve-report" else "out"
+    proc = ebrl_here(command, *extra, "--results", path, "--out", out, cwd=tmp_path)
+    _refused(proc, f"--results {path}: line 3: {begin} has no {end} after it")
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["RESULTS.md", "evolve", "evolved",
+                                                            "hand"]
+
+
 def test_a_page_is_edited_in_its_block_alone_its_crlf_and_its_text_kept(site):
     root, folder = site
     path = folder / "RESULTS.md"
