@@ -11,6 +11,7 @@ import hashlib
 import json
 import os
 import pathlib
+import shutil
 import types
 
 import pytest
@@ -50,15 +51,23 @@ MV = ["--factors", "threshold", "--universes", "1", "--seeds", "0-1", "--workers
 STEPS = run_folders.STEPS
 
 
-@pytest.fixture
-def universe(tmp_path):
+@pytest.fixture(scope="module")
+def reported_universe(tmp_path_factory):
     """A multiverse folder whose every run is on disk (written, not run), reported once."""
-    out = tmp_path / "mv"
+    out = tmp_path_factory.mktemp("universe") / "mv"
     _, chosen = multiverse.universes(multiverse.select(["threshold"]), 1)
     for s in multiverse.plan(out, chosen, [0, 1], STEPS):
         results.write_run(multiverse.root_of(out, s), s, run_folders.result((20, 45), s.steps),
                           {"lock": "test"})
     ebrl_here("multiverse", *MV, "--steps", STEPS, "--out", out, check=True)
+    return out
+
+
+@pytest.fixture
+def universe(tmp_path, reported_universe):
+    """A copy of the reported multiverse folder, for one test to damage."""
+    out = tmp_path / "mv"
+    shutil.copytree(reported_universe, out)
     return out
 
 
