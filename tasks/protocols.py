@@ -23,14 +23,17 @@ import dataclasses
 from types import MappingProxyType
 
 #: Bump when a change alters what a run computes, so stale results are not reused.
-#: 7: issue 48's rules kept whole (every random action Section 3.4's Gaussian; one
+#: 8: issue 56's body (a two-wheel move ends where the body first touches the room and
+#: its rest is turned, Section 3.3, on every two-wheel realisation; blocked_move "stop"
+#: in every protocol; the literal body kept by the fit, the shared threshold 0.2, fitted
+#: on seeds 8000-8099); 7: issue 48's rules kept whole (every random action Section 3.4's Gaussian; one
 #: fallback, the 20% replacing; the planar two-wheel body: radius 1.5, a blocked move
 #: refused, the commanded turn; fitted on seeds 7000-7099); 6: issue 37's rules (the 20%
 #: random action Section 3.4's Gaussian, one learner for both robots: policy threshold
 #: 0.3, initial reliability 1); 5: stage 1's readings, eq 2-4 by reciprocals; 4: the
 #: adopted readings per drive, diff_drive's Euler; 3: float64 similarity (CHANGELOG.md:
 #: each version, its commit).
-PROTOCOL_VERSION = 7
+PROTOCOL_VERSION = 8
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -62,22 +65,24 @@ class Protocol:
         return tuple(sorted(merged.items()))
 
 
-#: Protocol 7's learner, one set for both drives, as Table 1 gives one learner (all but
-#: the memory size). The policy threshold is fitted: 0.3, chosen in protocol 6 (the
-#: two-wheel robot ran 0, 0.05, 0.2, 0.3 and 0.4 on seeds 300-349, the floating robot 0,
-#: 0.3 and 0.4 on 300-329) and kept by protocol 7's fit against 0.2 and 0.4 on seeds
-#: 7000-7049, both robots, by the stated tests against the paper (13 of 14 passed, 0.2 12,
-#: 0.4 10: docs/interpretation.md, "The adopted readings (protocol 7)"); every other
-#: learner reading is its registry default.
-LEARNER = (("policy_threshold", 0.3),)
-#: Protocol 7's fallback, one for both drives (Section 3.4 describes its random action
+#: The learner, one set for both drives, as Table 1 gives one learner (all but the memory
+#: size). The policy threshold is fitted: 0.2, chosen by protocol 8's rule written before
+#: its fit (docs/interpretation.md, "Protocol 8: the plan"): on seeds 8000-8049 with
+#: protocol 8's body the two-wheel robot passed 6 of its 8 stated tests at 0.2 against 4 at
+#: 0.3 and 0.4 (at least 2 more), so the floating robot's counts from protocol 7's fit
+#: (seeds 7000-7049: 5 of 6 at 0.2, 6 at 0.3) were added: 11 against 10
+#: (docs/protocol8_fit.md). Protocol 6 chose 0.3 (seeds 300-349 / 300-329) and protocol 7
+#: kept it; every other learner reading is its registry default (the cutoff of eq 6,
+#: utility_cutoff, included: 1e-4).
+LEARNER = (("policy_threshold", 0.2),)
+#: The fallback (protocol 7's, kept), one for both drives (Section 3.4 describes its random action
 #: once, "in both types of experiments"): every random action Section 3.4's Gaussian
 #: (stated: the random walk's, the 20% and the exploration's), and the 20% replacing the
 #: avoidance action (the plain reading; `add` was not better by the rule written before
 #: the fit, on seeds 7000-7099's first trials).
 FALLBACK = (("random_demand", "gaussian"), ("random_in_avoidance", "replace"))
 
-#: Protocol 7 (docs/interpretation.md, "The adopted readings (protocol 7)").
+#: Protocol 8 (docs/interpretation.md, "The adopted readings (protocol 8)").
 ADOPTED = Protocol(
     "adopted", PROTOCOL_VERSION,
     readings=LEARNER + FALLBACK,
@@ -97,12 +102,11 @@ ADOPTED = Protocol(
                      ("velocity_noise", 0.06931187891441754), ("velocity_code", "code")),
     }),
     robots=MappingProxyType({
-        # Protocol 7's body: the file's radius, 1.5 units (literal; given as the number the
-        # fit's runs used), the leftover turn the commanded way (literal), and a blocked
-        # move refused whole (chosen by protocol 7's first-trial fit on seeds 7000-7099:
-        # this body slides along walls when stopped, Section 3.3's robot does not;
-        # docs/interpretation.md, "Why our two-wheel random walk reached the goal sooner")
-        "two_wheel": (("radius", 1.5), ("blocked_move", "refuse"), ("leftover_turn", "commanded")),
+        # Protocol 8's body: a blocked move stops where the body touches and turns the
+        # rest (stated, Section 3.3); its open values, the radius and the leftover turn's
+        # way, by protocol 8's first-trial fit (docs/interpretation.md, "Protocol 8: the
+        # plan, written before its fit")
+        "two_wheel": (("radius", 1.5), ("blocked_move", "stop"), ("leftover_turn", "commanded")),
         # stage 1's body (trial 9): the literal wall ("moves ... until it bumps": stopped
         # at the bump), a larger puck than its file's 1.5
         "floating": (("bump", "stop"), ("radius", 2.477124155927907)),

@@ -52,11 +52,14 @@ TASK = (
     Reading("velocity_code", "task", ("none", "code"), "none",
             "the floating robot's velocity reading as it is, or through a 0-255 code",
             drives=("floating",)),
-    # Section 3.3's blocked move: "stop" at contact and turn the rest, or "refuse" the move
-    # whole (undone) and turn all of it; the rest turns the commanded turn's way ("commanded",
+    # Section 3.3's blocked move, stated: "stop" where the body touches and turn the rest
+    # (every protocol's). "refuse" (the move undone, all of it turned) is no reading of the
+    # sentence: protocol 7's compensation for a body that slid along walls, kept only to
+    # remake protocol 7's runs. The rest turns the commanded turn's way ("commanded",
     # right when a = 0) or "away" from the side whose beams read nearer at the blocked pose.
     Reading("blocked_move", "task", ("stop", "refuse"), "stop",
-            "a blocked two-wheel move stops at contact, or is refused whole",
+            "a blocked two-wheel move stops at contact and turns the rest (stated); "
+            "refuse: protocol 7's, not Section 3.3",
             paper='Section 3.3: "If the agent cannot move any more because of collision with '
                   'an object, the rest portion of move is transferred into the angle of turn."',
             drives=("two_wheel",)),

@@ -125,3 +125,18 @@ def test_a_history_page_shows_its_own_figures():
             if "history" in page.relative_to(ROOT).parts:
                 assert (ROOT / "docs" / "history") in path.parents, \
                     f"{page.relative_to(ROOT)} shows {target}, which ebrl report rewrites"
+
+
+def test_the_headline_of_the_committed_summaries_judged_by_the_current_tests():
+    """The headline's format on the committed runs re-judged by today's tests
+    (verdicts.tested, docs/interpretation.md "Testing the figures (protocol 8)"), whatever
+    judge wrote their "tests": 12 rows, each verdict one of the four, Holm's counts beside
+    the raw ones, C6 by the rank test."""
+    from experiments.outputs import verdicts
+    current, literal = _committed()
+    for summary in (current, literal):
+        summary["tests"] = verdicts.tested(summary)
+    rows = headline.rows(current, literal)
+    assert len(rows) == 12 and all(r[6] in verdicts.VERDICTS for r in rows)
+    text = "\n".join(headline.table(current, literal))
+    assert "family-wise by Holm" in text and "C6" in text and "rank (one-sided)" in text

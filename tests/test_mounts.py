@@ -338,9 +338,11 @@ def test_the_gait_judges_a_fall_at_a_phases_end(robot):
 
 def test_an_installed_copy_finds_the_shipped_mounts_and_behaviours_by_name(tmp_path):
     """A non-editable install (pip install --no-deps --target, from a copy of the tracked
-    files) holds the mounts, the vendored car and the paper's behaviour files as package
-    data; from elsewhere, that copy compiles the car in the room and finds paper_eq8 by
-    name."""
+    files) holds every package of the source (each imports from the copy, with the
+    checkout's editable finder taken out of the import system, which would otherwise
+    serve a package the install lacks), the mounts, the vendored car and the paper's
+    behaviour files as package data; from elsewhere, that copy compiles the car in the room
+    and finds paper_eq8 by name."""
     import shutil
     import subprocess
     import sys
@@ -354,7 +356,19 @@ def test_an_installed_copy_finds_the_shipped_mounts_and_behaviours_by_name(tmp_p
     target = tmp_path / "site"
     subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--target",
                     str(target), str(source)], check=True, capture_output=True)
-    code = ("import tasks, ebrl.behaviour as b\n"
+    packages = sorted(".".join(p.parent.relative_to(source).parts)
+                      for p in source.glob("**/__init__.py")
+                      if p.parent.relative_to(source).parts[0] in
+                      ("ebrl", "tasks", "models", "behaviours", "experiments"))
+    assert "tasks.realisations" in packages and "ebrl.baselines" in packages
+    code = ("import importlib, sys\n"
+            # the checkout's editable install: its finder would serve what the copy lacks
+            "sys.meta_path[:] = [f for f in sys.meta_path if 'editable' not in repr(f)]\n"
+            "sys.path_hooks[:] = [h for h in sys.path_hooks if 'editable' not in repr(h)]\n"
+            "sys.path_importer_cache.clear()\n"
+            f"for name in {packages!r}:\n"
+            "    assert importlib.import_module(name).__file__.startswith(%r), name\n"
+            "import tasks, ebrl.behaviour as b\n"
             "assert tasks.__file__.startswith(%r)\n"
             "assert sorted(tasks.MOUNTS) == ['ant', 'car', 'gym_ant', 'point', 'point_mass', 'quadruped']\n"
             "assert tasks.resolve('car').model.is_relative_to(%r)\n"
@@ -363,7 +377,7 @@ def test_an_installed_copy_finds_the_shipped_mounts_and_behaviours_by_name(tmp_p
             "model, _ = tasks.compiled_model(tasks.resolve('car'))\n"
             "assert model.nu == 2 and model.nmesh > 0\n"
             "print(b.load('paper_eq8').behaviour, b.load('behaviours/paper_eq9-10.json').behaviour)\n"
-            % (str(target), str(target)))
+            % (str(target), str(target), str(target)))
     proc = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
                           text=True, env={"PYTHONPATH": str(target), "PATH": "/usr/bin:/bin",
                                           "HOME": str(tmp_path)})
@@ -447,7 +461,9 @@ def test_a_refused_move_of_the_car_returns_its_wheel_targets_too():
         substeps = physics.substeps
         env.step([0.0])
         x1, y1, _ = physics.robot_pose()
-        assert physics.substeps - substeps == 400   # turn, move, the whole move turned
+        # the turn and the leftover turn (100 substeps each), the move ended at the touch,
+        # short of its 200
+        assert 200 < physics.substeps - substeps < 400
         assert math.hypot(x1 - x0, y1 - y0) < 2 * 0.875 and x1 > x0 - 0.1
     finally:
         env.close()

@@ -2,7 +2,6 @@
 protocols, the claims as `ebrl report` judges them, the effects, the refusals, and (slow)
 the command on a tiny design and its resume."""
 import dataclasses
-import json
 import math
 from types import MappingProxyType
 
@@ -12,7 +11,7 @@ import pytest
 from experiments.outputs import multiverse as mv
 from experiments.running import execution
 from experiments.studies import design, multiverse
-from helpers import ebrl, ebrl_here
+from helpers import ebrl_here
 from tasks import protocols
 from tasks import readings as registry
 from tasks.robots import PAPER_ROBOTS, ROBOTS
@@ -88,6 +87,26 @@ def _same_as_protocol(universe, protocol, overrides=True):
     return True
 
 
+def test_no_factor_varies_a_stated_value_or_a_printed_equation():
+    """The readings held plain (multiverse.HELD_PLAIN: a value the paper states, an
+    equation it prints) are no factor's, and the protocols set none of them apart, so
+    that none becomes a factor of its own; a factor read from a contradiction in the text
+    quotes both sides."""
+    named = {n for f in multiverse.factors() for names in f.readings.values() for n in names}
+    assert not named & set(multiverse.HELD_PLAIN)
+    assert {"blocked_move", "eq7_walk", "random_demand"} <= set(multiverse.HELD_PLAIN)
+    assert all(name in registry.BY_NAME for name in multiverse.HELD_PLAIN)
+    assert [f.key for f in multiverse.factors()] == [f.key for f in multiverse.FACTORS]
+    assert named | set(multiverse.HELD_PLAIN) == set(registry.BY_NAME)  # each, one or other
+    for key in ("eq7_signal", "thrust"):  # both sides of the contradiction quoted
+        sentence = next(f for f in multiverse.FACTORS if f.key == key).sentence
+        assert sentence.count('"') >= 4 and "against it" in sentence, key
+    thrust = next(f for f in multiverse.FACTORS if f.key == "thrust")
+    assert multiverse.levels(thrust, "floating") == multiverse.Levels(
+        {"thrust": "scaled"}, {"thrust": "demand"}, "alternative")
+    assert multiverse.levels(thrust, "two_wheel").source == "inert"
+
+
 def test_the_factors_come_from_the_registry_and_the_protocols():
     factor_list = multiverse.factors()
     assert len(factor_list) >= 8
@@ -114,11 +133,12 @@ def test_the_factors_come_from_the_registry_and_the_protocols():
     assert not _same_as_protocol(universes[1], "literal")
 
 
-def _protocol_7():
-    """Protocol 7 as issue 48 plans it: one learner and one fallback, the plain two-wheel
-    body but for its refused blocked move, the floating body fitted."""
+def _protocol_8(two_wheel_body=(("radius", 1.5), ("leftover_turn", "commanded"))):
+    """Protocol 8 (tasks.protocols.ADOPTED as it landed: the two-wheel move stopped at
+    contact, stated), with the two-wheel body's open values (its radius and the leftover
+    turn's way) as its fit may choose them."""
     return protocols.Protocol(
-        "adopted", 7,
+        "adopted", 8,
         readings=(("policy_threshold", 0.3), ("random_demand", "gaussian"),
                   ("random_in_avoidance", "replace")),
         drives=MappingProxyType({
@@ -126,29 +146,43 @@ def _protocol_7():
             "floating": (("eq9_dead_zone", "keep"), ("action_noise", 0.17273080599893353),
                          ("velocity_noise", 0.06931187891441754), ("velocity_code", "code"))}),
         robots=MappingProxyType({
-            "two_wheel": (("radius", 1.5), ("blocked_move", "refuse"),
-                          ("leftover_turn", "commanded")),
+            "two_wheel": (("blocked_move", "stop"),) + two_wheel_body,
             "floating": (("bump", "stop"), ("radius", 2.477124155927907))}))
 
 
 def test_the_design_follows_the_adopted_protocol(monkeypatch):
-    monkeypatch.setattr(protocols, "ADOPTED", _protocol_7())
+    monkeypatch.setattr(protocols, "ADOPTED", _protocol_8())
     factor_list = multiverse.factors()
     assert [f.key for f in factor_list] == [f.key for f in multiverse.FACTORS]  # none extra
     d, universes = multiverse.universes(factor_list)
-    assert d.runs == 128 and d.resolution == 5
+    assert d.runs == 128 and d.resolution == 5 and len(factor_list) == 11
+    assert d.generators == ("H=ABCG", "J=BCDE", "K=ACDF", "L=ABCDEFG")
     body = next(f for f in factor_list if f.key == "body")
-    # the file's radius 1.5 is the plain one: the two-wheel body is its refused move
-    assert multiverse.levels(body, "two_wheel").alternative == {"radius": None,
-                                                                "blocked_move": "refuse"}
-    turn = next(f for f in factor_list if f.key == "turn_or_dead_zone")
-    assert multiverse.levels(turn, "two_wheel").source == "alternative"
+    # the literal two-wheel body (the file's radius, the commanded turn): its alternative
+    # is the rest turned away; the floating body is the adopted (fitted) one
+    assert multiverse.levels(body, "two_wheel") == multiverse.Levels(
+        {"radius": None, "leftover_turn": "commanded"},
+        {"radius": None, "leftover_turn": "away"}, "alternative")
+    assert multiverse.levels(body, "floating").source == "adopted"
+    keys = [f.key for f in factor_list]
+    up = {r: [k for k, c in zip(keys, multiverse.current_codes(r)) if c > 0]
+          for r in PAPER_ROBOTS}
+    assert up == {"two_wheel": ["threshold"], "floating": ["threshold", "body"]}
+    current = universes[-1]
+    assert current.name == "current" and current.row is None and current.adopted
+    # the current universe gives the adopted protocol's own values: the radius 1.5, not
+    # the plain level's None (the file's), which runs other bits
+    assert current.readings("two_wheel")["radius"] == 1.5
+    # a fitted two-wheel body is the body's alternative, whole
+    monkeypatch.setattr(protocols, "ADOPTED", _protocol_8(
+        (("radius", 2.0), ("leftover_turn", "away"))))
+    assert multiverse.levels(body, "two_wheel") == multiverse.Levels(
+        {"radius": None, "leftover_turn": "commanded"},
+        {"radius": 2.0, "leftover_turn": "away"}, "adopted")
     assert multiverse.current_codes("two_wheel") == multiverse.current_codes("floating")
-    assert [k for k, c in zip([f.key for f in factor_list], multiverse.current_codes("floating"))
-            if c > 0] == ["threshold", "body"]
     # a reading that no factor names, set apart by a protocol, becomes a factor
     monkeypatch.setattr(protocols, "ADOPTED", dataclasses.replace(
-        _protocol_7(), readings=_protocol_7().readings + (("episode", "continuing"),)))
+        _protocol_8(), readings=_protocol_8().readings + (("episode", "continuing"),)))
     assert multiverse.factors()[-1].key == "episode"
     assert multiverse.design_for(multiverse.factors()).runs == 256
 
@@ -221,28 +255,53 @@ def test_effects_are_recovered_from_the_design():
     assert mv.fit_effects(d.matrix[:32], y[:32]) is None  # the standard order's first half
 
 
+def test_steps_per_trial_both_ways():
+    """The analysis choice: a run's steps per trial as the mean of its completed trials,
+    or its budget over its goals (the unfinished last trial counted), from one record."""
+    record = {"robot": "two_wheel", "steps": 1000, "trials": [500, 100, 200],
+              "memory_decisions": 7, "seconds": 1.0}
+    mean, budget = (mv.run_of(record, d)["metrics"] for d in mv.DEFINITIONS)
+    assert mean["steps_per_trial"] == 800 / 3 and budget["steps_per_trial"] == 1000 / 3
+    assert mean["first_trial_steps"] == budget["first_trial_steps"] == 500
+    assert mean["goals"] == 3
+    none = mv.run_of(dict(record, trials=[]), "budget")["metrics"]
+    assert none["steps_per_trial"] is None and none["goals"] == 0
+    assert [c.key for c in mv.CLAIMS if mv.by_definition(c)] == ["C2", "C3", "C4", "C8",
+                                                                  "C9", "C10"]
+
+
 def test_the_analysis_and_the_curves(tmp_path):
     from experiments.outputs import multiverse_report as mr
-    chosen = multiverse.select(["threshold", "body", "exploration", "eq7_walk", "eq7_scope"])
+    chosen = multiverse.select(["threshold", "body", "exploration", "eq7_scope", "thrust"])
     d, universes = multiverse.universes(chosen)
     rng = np.random.default_rng(2)
     body = [f.key for f in multiverse.factors()].index("body")
-    records = {u.name: mv.universe_record(_universe_runs(
-        rng, scale=2.0 if u.codes["floating"][body] > 0 else 1.0,
-        floating_slow=u.codes["floating"][body] > 0)) for u in universes}
+    records = {}
+    for u in universes:
+        record = mv.universe_record(_universe_runs(
+            rng, scale=2.0 if u.codes["floating"][body] > 0 else 1.0,
+            floating_slow=u.codes["floating"][body] > 0))
+        records.update({(u.name, definition): record for definition in mv.DEFINITIONS})
     factor_list = multiverse.factors()
     analysis = mv.analyse(factor_list, chosen, universes, records)
-    assert analysis["C1"]["judged"] == d.runs
-    # the body triples the floating robot's shrinks (log 3), and nothing else moves them
-    assert np.allclose(analysis["C9"]["effects"]["mains"], [0, 0, 0, 0, math.log(3)], atol=1e-9)
+    assert analysis["C1"]["judged"] == d.runs  # the definition does not act on C1
+    assert analysis["C9"]["judged"] == 2 * d.runs  # both definitions of steps per trial
+    assert mv.keys(factor_list, chosen)[-1] == mv.CHOICE
+    # the body triples the floating robot's shrinks (log 3), and nothing else moves them:
+    # nor the definition (the same records under both here)
+    assert np.allclose(analysis["C9"]["effects"]["mains"], [0, 0, 0, math.log(3), 0, 0],
+                       atol=1e-9)
+    assert analysis["C1"]["effects"]["mains"][-1] is None
     text = mr.effects_tables(analysis, factor_list, chosen)
-    assert "`body`" in text and "x" in text
+    assert "`body`" in text and f"`{mv.CHOICE}`" in text
     path = mr.spec_curve(mv.CLAIMS[8], factor_list, chosen, universes, records,
                          tmp_path / "spec_C9.png")
     assert path.read_bytes()[:4] == b"\x89PNG"
     csv_text = mv.table(factor_list, universes, records)
-    assert len(csv_text.strip().splitlines()) == len(universes) + 1
-    assert csv_text.splitlines()[1].startswith("u001,1,literal,1,")
+    assert len(csv_text.strip().splitlines()) == 2 * len(universes) + 1
+    assert csv_text.splitlines()[1].startswith("u001,1,literal,mean,1,")
+    assert csv_text.splitlines()[2].startswith("u001,1,literal,budget,1,")
+    assert "is `current`, run beside the design" in mr.protocols_text(universes, factor_list)
 
 
 BAD = [
@@ -255,6 +314,8 @@ BAD = [
     (["--workers", "0"], "positive"),
     (["--backend", "mpi"], "mpi"),
     (["--out", "a_file/sub"], "--out"),
+    (["--records", "a_file"], "--records"),
+    (["--report-only"], "no records at"),
 ]
 
 
@@ -265,44 +326,6 @@ def test_bad_options_are_refused_in_one_line(tmp_path, args, message):
     lines = proc.stderr.strip().splitlines()
     assert proc.returncode == 2 and len(lines) == 1 and message in lines[0], proc.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a_file"]  # nothing written
-
-
-@pytest.mark.slow
-def test_a_tiny_design_runs_and_resumes_without_redoing_work(tmp_path):
-    out = tmp_path / "mv"
-    args = ["multiverse", "--universes", "2", "--seeds", "0-1", "--steps", "300",
-            "--workers", "2", "--no-progress", "--out", out]
-    proc = ebrl(*args)
-    assert proc.returncode == 0, proc.stderr
-    assert proc.stdout.strip().endswith("MULTIVERSE.md")
-    rows = (out / "multiverse.csv").read_text().splitlines()
-    assert [r.split(",")[0] for r in rows[1:]] == ["u001", "u002", "current"]
-    runs = sorted(out.glob("runs/*/*/*/seed_*/run.json"))
-    stamps = {p: p.stat().st_mtime_ns for p in runs}
-    assert len(runs) <= 3 * 2 * 2 * 2 and len({p.parts[-5] for p in runs}) >= 4
-    report = (out / "MULTIVERSE.md").read_text()
-    assert "literal protocol" in report and "## Cost" in report
-    again = ebrl_here(*args)
-    assert again.returncode == 0, again.stderr
-    assert {p: p.stat().st_mtime_ns for p in out.glob("runs/*/*/*/seed_*/run.json")} == stamps
-    sessions = json.loads((out / "timing.json").read_text())
-    assert sessions[-1]["runs_made"] == 0 and sessions[-1]["on_disk"] == len(runs)
-    assert (out / "multiverse.csv").read_text().splitlines() == rows
-    # the first universe is the literal protocol's runs, the current one `ebrl run`'s, bit
-    # for bit
-    d, universes = multiverse.universes(multiverse.factors(), 2)
-    for universe, protocol in ((universes[0], "literal"), (universes[-1], "adopted")):
-        assert ebrl_here("run", "--protocol", protocol, "--seeds", "0-1", "--steps", "300",
-                         "--workers", "2", "--no-progress", "--out", tmp_path / protocol,
-                         check=True).returncode == 0
-        for robot in PAPER_ROBOTS:
-            for condition in ("random", "avoidance"):
-                root = multiverse.root_of(out, execution.RunSpec(
-                    robot, condition, 0, 300, universe.overrides(robot, condition)))
-                for seed in ("seed_000", "seed_001"):
-                    mine = root / robot / condition / seed / "trace.npz"
-                    theirs = tmp_path / protocol / robot / condition / seed / "trace.npz"
-                    assert mine.read_bytes() == theirs.read_bytes(), (protocol, mine)
 
 
 def test_the_docs_list_every_factor_with_its_readings():
@@ -318,3 +341,6 @@ def test_the_docs_list_every_factor_with_its_readings():
             assert all(f"`{n}`" in readings_cell for n in names), (f.key, readings_cell)
         quote = f.sentence.split('"')[1].split(" ...")[0]
         assert quote in rows[f.key], (f.key, quote)
+    held = section.split("**Held plain, not factors**")[1].split("\n\n")[0]
+    assert all(f"`{name}`" in held for name in multiverse.HELD_PLAIN)
+    assert f"`{mv.CHOICE}`" not in rows and "`DEFINITIONS`" in section

@@ -1,6 +1,7 @@
 """Bad input on the newest surfaces (issue 58), each exit status 2 and one line naming the
 file or the option, nothing written and nothing lost: a multiverse folder's damaged
-bookkeeping (named, moved aside, made again) and a refused resume (no timing entry);
+bench.json (named, moved aside, made again), its damaged record shard (refused, left as
+it is) and a refused resume (found before any work, nothing touched);
 learners' sizes no machine holds (bounded before any run, the largest that fits named);
 mount `rest` values; behaviour genomes (with a property test of the genome reader);
 `ebrl evolve/fit --storage` on a file that is not a database; `ebrl bench --robot FILE`.
@@ -53,10 +54,11 @@ STEPS = run_folders.STEPS
 
 @pytest.fixture(scope="module")
 def reported_universe(tmp_path_factory):
-    """A multiverse folder whose every run is on disk (written, not run), reported once."""
+    """A multiverse folder whose every run is on disk (written, not run), reported once
+    (which records them: OUT/records)."""
     out = tmp_path_factory.mktemp("universe") / "mv"
     _, chosen = multiverse.universes(multiverse.select(["threshold"]), 1)
-    for s in multiverse.plan(out, chosen, [0, 1], STEPS):
+    for s in multiverse.plan(chosen, [0, 1], STEPS):
         results.write_run(multiverse.root_of(out, s), s, run_folders.result((20, 45), s.steps),
                           {"lock": "test"})
     ebrl_here("multiverse", *MV, "--steps", STEPS, "--out", out, check=True)
@@ -71,21 +73,18 @@ def universe(tmp_path, reported_universe):
     return out
 
 
-BOOKKEEPING = [  # (file, damaged content, what the warning says)
-    ("timing.json", b"{not json", "timing.json is not JSON (JSONDecodeError)"),
-    ("timing.json", b'{"seconds": 1}', "timing.json: it holds an object, not a list of calls"),
-    ("timing.json", b'[{"seconds": "a while", "workers": 1}]', "[0].seconds is a string"),
-    ("timing.json", b'[{"seconds": 3, "workers": 2}]', "[0].runs_made is missing"),
-    ("bench.json", b"[1, 2]", "bench.json: it holds a list, not an object of robots"),
-    ("bench.json", b'{"two_wheel": {"fused_loop": 80}}', "bench.json: floating is missing"),
-    ("bench.json", b"\xff", "bench.json is not JSON (UnicodeDecodeError)"),
+BOOKKEEPING = [  # (damaged bench.json, what the warning says)
+    (b"[1, 2]", "bench.json: it holds a list, not an object of robots"),
+    (b'{"two_wheel": {"fused_loop": 80}}', "bench.json: floating is missing"),
+    (b"\xff", "bench.json is not JSON (UnicodeDecodeError)"),
 ]
 
 
-@pytest.mark.parametrize("name, content, said", BOOKKEEPING, ids=[c[2][:36] for c in BOOKKEEPING])
-def test_a_damaged_bookkeeping_file_is_named_moved_aside_and_made_again(universe, name, content,
-                                                                        said):
+@pytest.mark.parametrize("content, said", BOOKKEEPING, ids=[c[1][:36] for c in BOOKKEEPING])
+def test_a_damaged_bench_json_is_named_moved_aside_and_made_again(universe, content, said):
+    name = "bench.json"
     (universe / name).write_bytes(content)
+    records = _tree(universe / "records")
     proc = ebrl_here("multiverse", *MV, "--steps", STEPS, "--out", universe)
     assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr
     warnings = proc.stderr.strip().splitlines()
@@ -94,17 +93,52 @@ def test_a_damaged_bookkeeping_file_is_named_moved_aside_and_made_again(universe
     aside = list(universe.glob(f"{name}.damaged-*"))
     assert len(aside) == 1 and aside[0].read_bytes() == content  # kept, never deleted
     assert aside[0].name in warnings[0]
-    sessions = schema.read_json(universe / "timing.json", schema.check_timing)
-    assert sessions[-1]["runs_made"] == 0 and sessions[-1]["on_disk"] == 16
+    assert not (universe / name).exists()  # made again by --bench; no floor without it
+    assert _tree(universe / "records") == records  # every run recorded: none made
     assert (universe / "MULTIVERSE.md").exists()
 
 
-def test_a_refused_resume_appends_nothing_to_timing_json(universe):
+@pytest.mark.parametrize("damage", ["cut short", "not gzip"])
+def test_a_damaged_record_shard_is_refused_and_left_as_it_is(universe, damage):
+    """The records' own defect (issue 57's refusal, kept): never moved aside or made
+    again, since its runs are what the study is."""
+    (shard,) = (universe / "records").glob("*.jsonl.gz")
+    data = shard.read_bytes()
+    shard.write_bytes(data[:-9] if damage == "cut short" else b"{not json\n")
     before = _tree(universe)
-    proc = ebrl_here("multiverse", *MV, "--steps", STEPS + 10, "--out", universe)
-    _refused(proc, "holds a run made with other parameters",
-             f"steps: {STEPS} on disk, {STEPS + 10} asked")
+    proc = ebrl_here("multiverse", *MV, "--steps", STEPS, "--out", universe)
+    _refused(proc, f"{shard}: damaged record file")
     assert _tree(universe) == before
+
+
+def _dead_session(folder, steps):
+    """An open shard of a session whose machine died (a header, no run), of steps."""
+    from experiments.studies import multiverse_records as kept
+    folder.mkdir()
+    header = {"format": kept.FORMAT, "version": kept.VERSION, "session": "dead",
+              "identity": kept.identity(multiverse.select(["threshold"]), steps),
+              "host": "a machine that died", "pid": 0, "workers": 1, "backend": "local"}
+    (folder / "dead-01.open.jsonl").write_text(json.dumps(header) + "\n")
+
+
+@pytest.mark.parametrize("records", ["OUT/records", "another folder"])
+def test_a_refused_resume_touches_nothing(universe, tmp_path, records):
+    """Another --steps: refused by the records of the first (OUT/records), or, with the
+    records elsewhere, by the run folders, before any work: no run, no record, and not
+    even a dead session's open shard sealed."""
+    extra = []
+    if records == "another folder":
+        _dead_session(tmp_path / "elsewhere", STEPS + 10)
+        extra = ["--records", tmp_path / "elsewhere"]
+    before = _tree(universe), _tree(tmp_path / "elsewhere")
+    proc = ebrl_here("multiverse", *MV, "--steps", STEPS + 10, "--out", universe, *extra)
+    if records == "OUT/records":
+        _refused(proc, f"{universe / 'records'}", f"--steps {STEPS}, this call asks for "
+                 f"--steps {STEPS + 10}")
+    else:
+        _refused(proc, "holds a run made with other parameters",
+                 f"steps: {STEPS} on disk, {STEPS + 10} asked")
+    assert (_tree(universe), _tree(tmp_path / "elsewhere")) == before
 
 
 # -- learners' sizes -------------------------------------------------------------------
@@ -304,12 +338,13 @@ def test_bench_times_a_robot_file_with_its_drive(tmp_path):
 
 # the helpers the tests above share, checked once
 def test_schema_readers_name_the_file(tmp_path):
-    path = tmp_path / "timing.json"
-    path.write_text("[]")
-    assert schema.read_json(path, schema.check_timing) == []
-    path.write_text("[3]")
-    with pytest.raises(schema.Damaged, match=rf"^{path}: \[0\] is an integer, not an object$"):
-        schema.read_json(path, schema.check_timing)
+    path = tmp_path / "bench.json"
     check = functools.partial(schema.check_bench, robots=("two_wheel",))
+    path.write_text('{"two_wheel": {"fused_loop": 80}}')
+    assert schema.read_json(path, check) == {"two_wheel": {"fused_loop": 80}}
+    path.write_text("[3]")
+    with pytest.raises(schema.Damaged, match=rf"^{path}: it holds a list, not an object of "
+                                             "robots$"):
+        schema.read_json(path, check)
     path.write_text('{"two_wheel": {"fused_loop": NaN}}')  # bench writes NaN where not fused
     assert schema.read_json(path, check)["two_wheel"]["fused_loop"] != 0

@@ -82,9 +82,9 @@ def test_sensors_once_per_step_read_as_sensors_every_substep():
 @pytest.mark.slow
 def test_planar_trajectories_unchanged_by_the_registry():
     """The first 3,000 steps of seeds 0-1, every paper robot and condition, as the full
-    run behind RESULTS.md made them (tests/data/planar_traces_v<PROTOCOL_VERSION>.npz,
-    cut from protocol 5's clean-clone run; protocol 5's readings and eq 2-4's reciprocals
-    changed every run). Bit for bit on one kind of machine: numpy's BLAS and math kernels
+    run behind RESULTS.md made them (tests/data/planar_traces_v<PROTOCOL_VERSION>.npz, made by
+    tests/data/make_golden.py at the protocol's code: a run's first steps are the same
+    whatever its budget). Bit for bit on one kind of machine: numpy's BLAS and math kernels
     round the last bit per CPU (same code, same seeds), so on another kind a run may part
     from these by a hundredth of a unit after some thousands of steps. Made again, or
     checked, by tests/data/make_golden.py."""
@@ -274,11 +274,11 @@ def test_a_drives_readings_reach_its_robots_runs_and_set_overrides_them():
         (agent.random_demand, agent.random_in_avoidance)
     assert (two.task_config().leftover_turn, two.task_config().radius) == ("away", None)
     assert two.task_config().action_noise == 0.05
-    # The planar two-wheel robot's own body (protocol 7): the file's radius, a blocked move
-    # refused, the commanded leftover turn, over its drive's.
+    # The planar two-wheel robot's own body (protocol 8): the file's radius, the blocked move
+    # stopped at the touch (stated), the commanded leftover turn, over its drive's.
     planar = execution.RunSpec("two_wheel", "random", 0, 10).task_config()
     assert (planar.radius, planar.blocked_move, planar.leftover_turn) == \
-        (1.5, "refuse", "commanded")
+        (1.5, "stop", "commanded")
     assert two.task_config().blocked_move == "stop"
     over = execution.RunSpec("floating", "avoidance", 0, 10,
                             (("bump", "grip"), ("policy_threshold", 0.1)))

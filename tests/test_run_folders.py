@@ -132,7 +132,8 @@ def test_ebrl_report_skips_damaged_runs_and_counts_them(tmp_path):
     (["--protocol", "literal"], "(protocol: adopted on disk, literal asked; agent."),
     (["--set", "radius=2"], "(task.radius: {} on disk, 2.0 asked)".format(
         dict(ADOPTED.robots["two_wheel"])["radius"])),
-    (["--set", "policy_threshold=0.1"], "(agent.policy_threshold: 0.3 on disk, 0.1 asked)"),
+    (["--set", "policy_threshold=0.1"], "(agent.policy_threshold: {} on disk, 0.1 asked)".format(
+        dict(ADOPTED.readings)["policy_threshold"])),
 ])
 def test_a_resume_into_other_parameters_names_them(tmp_path, args, said):
     run_folders.make(tmp_path)

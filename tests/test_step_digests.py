@@ -3,9 +3,13 @@
 tests/data/step_digests_v<PROTOCOL_VERSION>.json holds, for each robot and mount (and a
 few readings), the sha256 of 300 steps (the Ant: 25) of random actions: each step's
 observation, pose, qpos, qvel, step type, reward and substep count, by the hooks
-(`env.compiled = False`) and by the compiled step. They were made at 55615e7, where the
-drives' steps were still written in Python beside their kernels and the car and the Ant
-ran on Python hooks only; tests/data/make_golden.py makes them again."""
+(`env.compiled = False`) and by the compiled step. Version 7's were made at 55615e7, where
+the drives' steps were still written in Python beside their kernels; version 8's (issue 56:
+a two-wheel move ends at the touch) by tests/data/make_golden.py, which makes them again.
+Between the two, every robot that never touched a wall with a two-wheel move kept its
+digests bit for bit (the floating robot, the hovercraft, the point mass, the Ant, the
+quadruped); the two-wheel robots that touched one changed (two_wheel, diff_drive, the car,
+the point)."""
 import json
 import pathlib
 

@@ -1,9 +1,12 @@
 """`ebrl multiverse`: the protocol in every universe of a resolution-V design over the open
 readings (experiments.studies.multiverse), then MULTIVERSE.md, multiverse.csv and a
-specification curve per claim (experiments.outputs.multiverse, multiverse_report)."""
-import datetime
+specification curve per claim (experiments.outputs.multiverse, multiverse_report).
+
+Each finished run leaves its record in the records folder (--records; experiments.studies.
+multiverse_records), which is what the analysis reads and what a resume skips: a fresh
+clone given the committed records (docs/data/multiverse) makes only the runs they lack,
+or none (--report-only). The records are read and checked before any work."""
 import pathlib
-import time
 
 from experiments.checks import validate
 from experiments.commands import arguments
@@ -31,7 +34,15 @@ def add_parser(subparsers):
                         "budgets)")
     arguments.add_workers(p)
     arguments.add_backend(p)
-    p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("multiverse"))
+    p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("multiverse"),
+                   help="the report, the table, the figures and the run folders (default: "
+                        "multiverse)")
+    p.add_argument("--records", type=pathlib.Path, default=None, metavar="DIR",
+                   help="the runs' records, read first (a run recorded there is not made "
+                        "again) and appended to (default: OUT/records; the committed "
+                        "study's: docs/data/multiverse)")
+    p.add_argument("--report-only", action="store_true",
+                   help="make no run: the report from the records alone")
     p.add_argument("--bench", action="store_true",
                    help="also measure the cost of a step (ebrl bench's fused loop) for the "
                         "report's floor (OUT/bench.json)")
@@ -45,6 +56,8 @@ def _check(args):
     from experiments.studies import multiverse
     from tasks.robots import PAPER_ROBOTS
     validate.output_folder(args.out, "--out")
+    if args.records is not None and not args.report_only:
+        validate.output_folder(args.records, "--records")
     check_backend(args.backend)
     keys = None if args.factors == "all" else \
         [k.strip() for k in args.factors.split(",") if k.strip()]
@@ -59,20 +72,6 @@ def _check(args):
             for values in (lv.plain, lv.alternative):
                 agent_configs((robot,), tuple(sorted(values.items())))
     return chosen, multiverse.universes(chosen, args.universes)
-
-
-def _timing(out, started, seconds, ran, args):
-    """OUT/timing.json: every call's wall time and runs (ran: runner.Ran; None for a call
-    stopped before its runs were done), appended."""
-    from experiments.running import results, schema
-    path = out / "timing.json"
-    sessions = results.read_bookkeeping(path, schema.check_timing) or []
-    counts = ({"interrupted": True} if ran is None else
-              {"runs_made": ran.made, "on_disk": ran.on_disk, "failed": len(ran.failed)})
-    sessions.append({"started": started, "seconds": round(seconds, 1), **counts,
-                     "workers": args.workers, "backend": args.backend})
-    results.atomic_write(path, results.dumps(sessions))
-    return sessions
 
 
 def _bench(out, measure):
@@ -92,15 +91,68 @@ def _bench(out, measure):
     return results.read_bookkeeping(path, check)
 
 
-def _report(args, chosen, design, universes, seconds_made):
-    """Collects what is on disk and writes the table, the figures and MULTIVERSE.md."""
+def _records(args, chosen, universes):
+    """(the records folder, the plan's specs, its Store, {spec: record} of the recorded
+    ones): every record file read and checked against this call (RecordsError)."""
+    from experiments.studies import multiverse, multiverse_records
+    folder = args.records if args.records is not None else args.out / "records"
+    store = multiverse_records.Store(folder, multiverse_records.identity(chosen, args.steps))
+    specs = multiverse.plan(universes, args.seeds, args.steps)
+    return folder, specs, store, store.match(specs)
+
+
+def _levels(chosen):
+    from experiments.studies import multiverse
+    from tasks.robots import PAPER_ROBOTS
+    return {f.key: {r: [multiverse.levels(f, r).plain, multiverse.levels(f, r).alternative]
+                    for r in PAPER_ROBOTS} for f in multiverse.factors()}
+
+
+def _make(args, chosen, specs, made, folder):
+    """Runs what no record holds (a complete run folder under OUT/runs without a record
+    gives its record first), each run's record appended as it is written; returns
+    runner.Ran."""
+    from experiments.running import results
+    from experiments.studies import multiverse
+    from experiments.studies import multiverse_records as kept
+    writer = kept.Writer(folder, kept.identity(chosen, args.steps), _levels(chosen),
+                         args.workers, args.backend)
+    kept.seal_left(folder)
+
+    def keep(spec, record):
+        writer.add(record)
+        made[spec] = record
+
+    ran = None
+    try:
+        todo = [s for s in specs if s not in made]
+        for spec in todo:  # a run made before records were kept, or killed before its record
+            root = multiverse.root_of(args.out, spec)
+            if results.existing(root, spec) == "done":
+                run = results.read_run_json(results.run_dir(root, spec) / "run.json")
+                record = kept.from_folder(root, spec, run)
+                keep(spec, dict(record, at=round(writer.at(), 1)))
+        ran = multiverse.run(
+            args.out, [s for s in todo if s not in made], args.workers, args.backend,
+            not args.no_progress,
+            written=lambda spec, run, result: keep(spec, kept.record_of(
+                spec, result["trial_ends"], result["memory_decisions"], result["seconds"],
+                writer.at())))
+    finally:  # Ctrl-C, a kill, a lost cluster: the records so far are sealed, kept
+        writer.close(ran.made if ran else writer.count, interrupted=ran is None)
+    return ran
+
+
+def _report(args, chosen, design, universes, folder, specs, store, made):
+    """The table, the figures and MULTIVERSE.md from the records (made: {spec: record})."""
     from experiments.outputs import multiverse as mv
     from experiments.outputs import multiverse_report as mr
     from experiments.running import results
     from experiments.studies import multiverse
     out = args.out
-    data, failed, seconds, commits = multiverse.collect(out, universes, args.seeds, args.steps)
-    records = {name: mv.universe_record(runs) for name, runs in data.items()}
+    data = multiverse.gather(universes, args.seeds, args.steps, made)
+    records = {(name, d): mv.universe_record(runs, d)
+               for name, runs in data.items() for d in mv.DEFINITIONS}
     factor_list = multiverse.factors()
     analysis = mv.analyse(factor_list, chosen, universes, records)
     results.atomic_write(out / "multiverse.csv", mv.table(factor_list, universes, records))
@@ -110,49 +162,48 @@ def _report(args, chosen, design, universes, seconds_made):
                              out / "figures" / f"spec_{claim.key}.png")
         if path is not None:
             figures[claim.key] = f"figures/{path.name}"
-    specs = multiverse.plan(out, universes, args.seeds, args.steps)
     steps_by_robot = {}
     for s in specs:
         steps_by_robot[s.robot] = steps_by_robot.get(s.robot, 0) + s.steps
+    failed = [] if args.report_only else multiverse.failed(out, [s for s in specs
+                                                                 if s not in made])
+    from experiments.studies.multiverse_records import key
+    matched = {key(s) for s in made}
     ctx = mr.Context(factor_list, chosen, design, universes, records, analysis, args.seeds,
-                     args.steps, len(specs), seconds, commits, seconds_made,
-                     _bench(out, args.bench), steps_by_robot, figures, failed)
+                     args.steps, len(specs), [float(r["seconds"]) for r in made.values()],
+                     store.commits(), store.timing(), _bench(out, args.bench), steps_by_robot,
+                     figures, failed, str(folder), sum(k not in matched for k in store.runs))
     results.atomic_write(out / "multiverse.json", results.dumps({
         "design": {"name": design.name(), "generators": list(design.generators),
                    "resolution": design.resolution, "factors": [f.key for f in chosen],
                    "matrix": design.matrix.tolist()},
         "universes": {u.name: {"row": u.row, "marks": list(u.marks), "codes": u.codes,
-                               "claims": (records[u.name] or {}).get("claims")}
+                               "claims": {d: (records[(u.name, d)] or {}).get("claims")
+                                          for d in mv.DEFINITIONS}}
                       for u in universes},
         "analysis": analysis}))
     return mr.write(out, ctx), failed
 
 
 def run(args):
+    from experiments.running import results
+    from experiments.studies import multiverse
     try:
         chosen, (design, universes) = _check(args)
-    except ValueError as e:
+        folder, specs, store, made = _records(args, chosen, universes)
+        if not args.report_only:  # the run folders the records lack, before any work: a
+            multiverse.check_on_disk(args.out, [s for s in specs if s not in made])  # refused
+    except (ValueError, results.ResultsError) as e:  # resume touches nothing
         return fail(str(e))
-    from experiments.running import results, schema
-    from experiments.studies import multiverse
-    try:  # what is on disk, before any work: a refusal writes nothing (no timing entry)
-        multiverse.check_on_disk(args.out, universes, args.seeds, args.steps)
-    except results.ResultsError as e:
-        return fail(str(e))
+    if args.report_only and not store.files:
+        return fail(f"--report-only: no records at {folder}")
     args.out.mkdir(exist_ok=True)
-    results.read_bookkeeping(args.out / "timing.json", schema.check_timing)  # a damaged
-    _bench(args.out, False)  # timing.json or bench.json is set aside now, named, made again
-    started = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-    clock = time.perf_counter()
     try:
-        try:
-            ran = multiverse.run(args.out, universes, args.seeds, args.steps, args.workers,
-                                 args.backend, not args.no_progress)
-        except BaseException:  # Ctrl-C, a kill, a lost cluster: its wall time still counts
-            _timing(args.out, started, time.perf_counter() - clock, None, args)
-            raise
-        sessions = _timing(args.out, started, time.perf_counter() - clock, ran, args)
-        path, failed = _report(args, chosen, design, universes, sessions)
+        _bench(args.out, False)  # a damaged bench.json is set aside now, named, made again
+        if not args.report_only:
+            _make(args, chosen, specs, made, folder)
+            store = type(store)(folder, store.ident)  # this session's records and end too
+        path, failed = _report(args, chosen, design, universes, folder, specs, store, made)
     except results.ResultsError as e:
         return fail(str(e))
     return finish("multiverse", path, failed)

@@ -2,20 +2,31 @@
 intervals (its table, multiverse.csv), and across the universes each claim's share and
 each factor's effects on it.
 
-The claims are Section 3.6's ten, as `ebrl report` judges them (experiments.outputs.
-report.claims: the same verdicts, tests/test_multiverse.py), each with a statistic and a
-95% interval, numbered as RESULTS.md numbers them:
+The claims are Section 3.6's ten, as `ebrl report` judges them (each by the test of
+experiments.outputs.verdicts' claim_tests, at its raw p: the same verdicts,
+tests/test_multiverse.py), each with a statistic and a 95% interval, numbered as RESULTS.md
+numbers them:
 
 - C1, C2, C7, C8 (avoidance cuts first-trial steps, steps per trial): the random walk's
-  mean over the avoidance mean; holds when above 1. The interval resamples seeds, the
-  same seeds for both conditions (a seed gives both conditions the same streams).
+  mean over the avoidance mean; holds when the one-sided Welch test of the random walk's
+  mean above the avoidance mean rejects (verdicts.cut_p). The interval resamples seeds,
+  the same seeds for both conditions (a seed gives both conditions the same streams).
 - C3, C4, C9, C10 (learning shrinks trials): the shrink and its interval
-  (results.summarize); holds when the interval lies below 1.
+  (results.summarize); holds when the one-sided z test of its log below 0 rejects
+  (verdicts.shrinks_p).
 - C5 (most two-wheel random walks reach fewer than 30 goals in 30,000 steps): the share
-  of runs below 30 goals, Wilson's interval; holds above a half.
+  of runs below 30 goals, Wilson's interval; holds when the one-sided binomial test
+  against a half rejects (verdicts.most_p).
 - C6 (every two-wheel avoidance run reaches at least 49 goals): the fewest goals, a
-  percentile bootstrap of the minimum; holds at 49 or more. C5 and C6 are judged at the
-  paper's budget only.
+  percentile bootstrap of the minimum; holds unless the rank test shows more of our runs
+  below 49 than one distribution gives (verdicts.rank_below). C5 and C6 are judged at
+  the paper's budget only.
+
+Each universe is summarised from its runs' records (experiments.studies.
+multiverse_records) under both definitions of steps per trial (DEFINITIONS: an analysis
+choice beside the readings, computed from the same runs), and each claim of steps per
+trial (by_definition) is judged under both: a specification each, the definition a ±1
+column beside the factors' (crossed with the design, which keeps its resolution).
 
 A factor's main effect on a claim is estimated by least squares on the design's ±1
 columns (main effects and, where the universes run allow it, every two-factor
@@ -32,7 +43,7 @@ import warnings
 import numpy as np
 
 from experiments import paper
-from experiments.outputs import report
+from experiments.outputs import report, verdicts
 from experiments.running import results
 from tasks.robots import DRIVES
 
@@ -85,6 +96,37 @@ def _claims():
 
 #: The ten claims, C1-C10.
 CLAIMS = _claims()
+
+#: The analysis choice beside the readings: a run's steps per trial (Section 3.6: "The
+#: average number of steps per trial within 30,000 steps of learning"), computed from
+#: the same runs both ways: the mean of its completed trials (execution.metrics, what
+#: `ebrl report` prints: the plain one), or its budget over its goals. 6-25% apart at
+#: 2-8 goals (the unfinished last trial counts in the second).
+DEFINITIONS = ("mean", "budget")
+#: The choice's key beside the factors' (tables, the effects, the curves).
+CHOICE = "steps_per_trial"
+
+
+def by_definition(claim):
+    """Whether a claim's statistic is of steps per trial (the ratio of steps per trial
+    and the shrinks), so that the definition can change it."""
+    return claim.kind == "shrink" or (claim.kind == "ratio" and "per trial" in claim.what)
+
+
+def run_of(record, definition):
+    """A record (experiments.studies.multiverse_records) as the run the summary takes
+    (results.summarize: its metrics, its steps, its memory decisions), its steps per
+    trial by the definition."""
+    from experiments.running import execution
+    from tasks.robots import ROBOTS
+    trials = record["trials"]
+    metrics = execution.metrics(np.cumsum(np.asarray(trials, dtype=np.int64)))
+    if definition == "budget":
+        metrics["steps_per_trial"] = record["steps"] / len(trials) if trials else None
+    return {"metrics": metrics, "memory_decisions": record["memory_decisions"],
+            "seconds": record["seconds"],
+            "parameters": {"steps": record["steps"], "drive": ROBOTS[record["robot"]].drive,
+                           "learner": "ebrl"}}
 #: The twelve figures: (robot, condition, figure).
 FIGURES = tuple((r, c, f) for r in ("two_wheel", "floating") for c in paper.CONDITIONS
                 for f in ("first_trial_steps", "steps_per_trial", "shrink"))
@@ -133,11 +175,13 @@ def claim_values(runs, summary):
         if c.kind == "ratio":
             metric = "first_trial_steps" if "first" in c.what else "steps_per_trial"
             value, ci = _paired_ratio(runs, c.robot, metric, rng)
-            holds = None if value is None else value > c.bar
+            p = verdicts.cut_p(groups[(c.robot, "random")], groups[(c.robot, "avoidance")],
+                               metric)
+            holds = None if value is None else _rejects(p)
         elif c.kind == "shrink":
             g = groups[(c.robot, c.what.split(":")[0])]
             value, ci = g["shrink"], g["shrink_ci95"]
-            holds = None if value is None else (ci[1] < 1.0 if ci else value < 1.0)
+            holds = None if value is None else _rejects(verdicts.shrinks_p(g))
         else:
             cond = "random" if c.kind == "share" else "avoidance"
             g = groups[(c.robot, cond)]
@@ -145,14 +189,21 @@ def claim_values(runs, summary):
                 _, goals = _per_seed(runs, c.robot, cond, "goals")
                 if c.kind == "share":
                     k = int(np.sum(goals < 30))
-                    value, ci, holds = k / len(goals), wilson(k, len(goals)), k > len(goals) / 2
+                    value, ci = k / len(goals), wilson(k, len(goals))
+                    holds = _rejects(verdicts.most_p(k, len(goals)))
                 else:
                     idx = rng.integers(0, len(goals), size=(BOOTSTRAP, len(goals)))
                     value = float(goals.min())
                     ci = [float(x) for x in np.percentile(goals[idx].min(axis=1), [2.5, 97.5])]
-                    holds = value >= c.bar
+                    holds = not _rejects(verdicts.rank_below(int(np.sum(goals < c.bar)),
+                                                             len(goals)))
         out[c.key] = {"value": value, "ci": ci, "holds": holds}
     return out
+
+
+def _rejects(p):
+    """Whether a claim's test rejects at verdicts.ALPHA (a test that cannot be made does not)."""
+    return p is not None and p < verdicts.ALPHA
 
 
 def figure_values(summary):
@@ -165,10 +216,13 @@ def figure_values(summary):
     return out
 
 
-def universe_record(runs):
-    """A complete universe's summary, figures and claims (None for an incomplete one)."""
+def universe_record(runs, definition=None):
+    """A complete universe's summary, figures and claims (None for an incomplete one);
+    given a definition, runs are records (run_of)."""
     if runs is None:
         return None
+    if definition is not None:
+        runs = {k: run_of(r, definition) for k, r in runs.items()}
     summary = results.summarize(runs)
     return {"summary": summary, "figures": figure_values(summary),
             "claims": claim_values(runs, summary),
@@ -200,12 +254,14 @@ def _code_text(universe, k):
 
 
 def table(factor_list, universes, records):
-    """multiverse.csv's text: one row per universe: its name, design row, marks, each
-    factor's code, each robot's readings, the twelve figures and the ten claims with
-    their intervals ("" where not computed; complete 0 for a universe with runs missing)."""
+    """multiverse.csv's text: one row per universe and definition of steps per trial
+    (records: {(universe name, definition): universe_record}): its name, design row,
+    marks, the definition, each factor's code, each robot's readings, the twelve figures
+    and the ten claims with their intervals ("" where not computed; complete 0 for a
+    universe with runs missing)."""
     from tasks.robots import PAPER_ROBOTS
     names = {r: sorted({n for u in universes for n in u.readings(r)}) for r in PAPER_ROBOTS}
-    head = ["universe", "row", "marks", "complete"] + [f.key for f in factor_list]
+    head = ["universe", "row", "marks", CHOICE, "complete"] + [f.key for f in factor_list]
     head += [f"{r}.{n}" for r in PAPER_ROBOTS for n in names[r]]
     for r, c, f in FIGURES:
         head += [f"{r}.{c}.{f}", f"{r}.{c}.{f}.lo", f"{r}.{c}.{f}.hi"]
@@ -215,21 +271,23 @@ def table(factor_list, universes, records):
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(head)
     for u in universes:
-        rec = records.get(u.name)
-        row = [u.name, "" if u.row is None else u.row + 1, " ".join(u.marks), int(rec is not None)]
-        row += [_code_text(u, k) for k in range(len(factor_list))]
-        for r in PAPER_ROBOTS:
-            mine = u.readings(r)
-            row += [_fmt(mine.get(n)) for n in names[r]]
-        for key in FIGURES:
-            value, ci = rec["figures"].get(key, (None, None)) if rec else (None, None)
-            row += [_fmt(value), _fmt(ci[0] if ci else None), _fmt(ci[1] if ci else None)]
-        for c in CLAIMS:
-            x = rec["claims"][c.key] if rec else {"value": None, "ci": None, "holds": None}
-            ci = x["ci"]
-            row += [_fmt(x["value"]), _fmt(ci[0] if ci else None), _fmt(ci[1] if ci else None),
-                    "" if x["holds"] is None else int(x["holds"])]
-        w.writerow(row)
+        for definition in DEFINITIONS:
+            rec = records.get((u.name, definition))
+            row = [u.name, "" if u.row is None else u.row + 1, " ".join(u.marks), definition,
+                   int(rec is not None)]
+            row += [_code_text(u, k) for k in range(len(factor_list))]
+            for r in PAPER_ROBOTS:
+                mine = u.readings(r)
+                row += [_fmt(mine.get(n)) for n in names[r]]
+            for key in FIGURES:
+                value, ci = rec["figures"].get(key, (None, None)) if rec else (None, None)
+                row += [_fmt(value), _fmt(ci[0] if ci else None), _fmt(ci[1] if ci else None)]
+            for c in CLAIMS:
+                x = rec["claims"][c.key] if rec else {"value": None, "ci": None, "holds": None}
+                ci = x["ci"]
+                row += [_fmt(x["value"]), _fmt(ci[0] if ci else None),
+                        _fmt(ci[1] if ci else None), "" if x["holds"] is None else int(x["holds"])]
+            w.writerow(row)
     return buf.getvalue()
 
 
@@ -258,39 +316,65 @@ def fit_effects(codes, y):
     return None
 
 
+def keys(factor_list, chosen):
+    """The keys the analysis reports on: the chosen factors', then the definition of steps
+    per trial (CHOICE)."""
+    return [f.key for f in factor_list if f in chosen] + [CHOICE]
+
+
+def specifications(claim, universes, records):
+    """The claim's specifications among the design's complete universes: (universe,
+    definition) pairs, both definitions for a claim of steps per trial (by_definition),
+    the plain one alone for the others (which the definition does not change)."""
+    definitions = DEFINITIONS if by_definition(claim) else DEFINITIONS[:1]
+    return [(u, d) for u in universes for d in definitions
+            if u.row is not None and records.get((u.name, d))]
+
+
 def analyse(factor_list, chosen, universes, records):
-    """Per claim: the universes judged, the share holding with its interval, the chosen
-    factors' effects on its statistic, and the share holding at each factor's two levels
-    ({claim key: ...})."""
+    """Per claim: the specifications judged, the share holding with its interval, the
+    chosen factors' and the definition's effects on its statistic (the definition's None
+    where it does not act), and the share holding at each one's two levels ({claim key:
+    ...}; the effects and the shares in keys()' order)."""
     index = [i for i, f in enumerate(factor_list) if f in chosen]
-    design_rows = [u for u in universes if u.row is not None and records.get(u.name)]
     out = {}
     for c in CLAIMS:
-        judged = [u for u in design_rows if records[u.name]["claims"][c.key]["holds"] is not None]
-        k = sum(records[u.name]["claims"][c.key]["holds"] for u in judged)
-        valued = [u for u in judged if (records[u.name]["claims"][c.key]["value"] or 0) > 0
-                  or not c.log]
-        codes = [[u.codes[c.robot][i] for i in index] for u in valued]
-        y = transform(c, [records[u.name]["claims"][c.key]["value"] for u in valued])
-        by_level = []  # each chosen factor: the share holding with it plain, alternative
-        for i in index:
+        acts = by_definition(c)
+
+        def code(u, d):
+            return [u.codes[c.robot][i] for i in index] + ([1 if d == DEFINITIONS[1] else -1]
+                                                           if acts else [])
+
+        def verdict(u, d):
+            return records[(u.name, d)]["claims"][c.key]
+
+        judged = [(u, d) for u, d in specifications(c, universes, records)
+                  if verdict(u, d)["holds"] is not None]
+        k = sum(verdict(u, d)["holds"] for u, d in judged)
+        valued = [(u, d) for u, d in judged if (verdict(u, d)["value"] or 0) > 0 or not c.log]
+        effects = fit_effects([code(u, d) for u, d in valued],
+                              transform(c, [verdict(u, d)["value"] for u, d in valued]))
+        if effects is not None and not acts:
+            effects["mains"].append(None)
+        by_level = []  # each key: the share holding at its plain, its alternative level
+        for j in range(len(index) + 1):
             shares = []
             for level in (-1, 1):
-                at = [records[u.name]["claims"][c.key]["holds"] for u in judged
-                      if u.codes[c.robot][i] == level]
+                at = [verdict(u, d)["holds"] for u, d in judged
+                      if j < len(code(u, d)) and code(u, d)[j] == level]
                 shares.append(sum(at) / len(at) if at else None)
             by_level.append(shares)
         out[c.key] = {
             "judged": len(judged), "holds": int(k), "share": k / len(judged) if judged else None,
             "share_ci": wilson(k, len(judged)) if judged else None,
-            "effects": fit_effects(codes, y), "holds_by_level": by_level,
+            "effects": effects, "holds_by_level": by_level,
         }
     return out
 
 
 def effect_text(claim, effect):
     """An effect as read: x1.23 (a log-scale statistic's ratio), else +0.12 (share) or +3.0
-    goals."""
+    goals; "-" for none."""
     if effect is None:
         return "-"
     if claim.log:

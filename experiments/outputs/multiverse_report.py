@@ -20,30 +20,40 @@ from experiments.running import results
 RAY_CORES = 16
 
 
-def _value(records, u, claim):
-    return records[u.name]["claims"][claim.key]
+def _value(records, point, claim):
+    u, d = point
+    return records[(u.name, d)]["claims"][claim.key]
 
 
 def spec_curve(claim, factor_list, chosen, universes, records, path):
-    """The claim's specification curve as a PNG at path; None when no universe has its
-    statistic."""
+    """The claim's specification curve as a PNG at path: every complete universe's
+    statistic, under each definition of steps per trial for a claim of steps per trial
+    (mv.by_definition); None when no universe has its statistic."""
     from experiments.studies import multiverse as study
-    pts = [u for u in universes if records.get(u.name) and _value(records, u, claim)["value"]
-           is not None and (_value(records, u, claim)["value"] > 0 or not claim.log)]
+    definitions = mv.DEFINITIONS if mv.by_definition(claim) else mv.DEFINITIONS[:1]
+    pts = [(u, d) for u in universes for d in definitions if records.get((u.name, d))
+           and _value(records, (u, d), claim)["value"] is not None
+           and (_value(records, (u, d), claim)["value"] > 0 or not claim.log)]
     if not pts:
         return None
-    pts.sort(key=lambda u: _value(records, u, claim)["value"])
+    pts.sort(key=lambda p: _value(records, p, claim)["value"])
     rows = [i for i, f in enumerate(factor_list)
-            if f in chosen or any(u.codes[claim.robot][i] > 0 for u in pts)]
+            if f in chosen or any(u.codes[claim.robot][i] > 0 for u, _ in pts)]
+    labels = [factor_list[i].key + (" (inert)" if study.levels(
+        factor_list[i], claim.robot).source == "inert" else "") for i in rows]
+    cells = [[u.codes[claim.robot][i] > 0 for u, _ in pts] for i in rows]
+    if len(definitions) > 1:
+        labels.append(f"{mv.CHOICE}: {mv.DEFINITIONS[1]}")
+        cells.append([d == mv.DEFINITIONS[1] for _, d in pts])
     plt = report.pyplot()
     n = len(pts)
     fig, (ax, grid) = plt.subplots(
-        2, 1, sharex=True, figsize=(min(max(6.0, 0.06 * n + 3.5), 18.0), 3.2 + 0.22 * len(rows)),
-        gridspec_kw={"height_ratios": [3.0, 0.22 * len(rows) + 0.3], "hspace": 0.05})
+        2, 1, sharex=True, figsize=(min(max(6.0, 0.06 * n + 3.5), 18.0), 3.2 + 0.22 * len(cells)),
+        gridspec_kw={"height_ratios": [3.0, 0.22 * len(cells) + 0.3], "hspace": 0.05})
     x = np.arange(n)
-    vals = np.array([_value(records, u, claim)["value"] for u in pts], dtype=np.float64)
-    cis = [_value(records, u, claim)["ci"] or [v, v] for u, v in zip(pts, vals)]
-    held = [bool(_value(records, u, claim)["holds"]) for u in pts]
+    vals = np.array([_value(records, p, claim)["value"] for p in pts], dtype=np.float64)
+    cis = [_value(records, p, claim)["ci"] or [v, v] for p, v in zip(pts, vals)]
+    held = [bool(_value(records, p, claim)["holds"]) for p in pts]
     colours = ["tab:green" if h else "tab:red" for h in held]
     lo = np.array([c[0] for c in cis])
     if claim.log:
@@ -52,7 +62,7 @@ def spec_curve(claim, factor_list, chosen, universes, records, path):
     ax.scatter(x, vals, c=colours, s=10, zorder=3)
     for mark, style in (("literal", dict(marker="*", s=160, label="literal protocol")),
                         ("current", dict(marker="D", s=60, label="current protocol"))):
-        at = [i for i, u in enumerate(pts) if mark in u.marks]
+        at = [i for i, (u, d) in enumerate(pts) if mark in u.marks and d == mv.DEFINITIONS[0]]
         if at:
             ax.scatter(at, vals[at], facecolors="none", edgecolors="k", zorder=4, lw=1.2, **style)
             for i in at:
@@ -65,22 +75,20 @@ def spec_curve(claim, factor_list, chosen, universes, records, path):
         ax.yaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
         ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
         ax.yaxis.set_minor_formatter(NullFormatter())
-    ax.set_title(f"{claim.label()}: holds in {sum(held)} of {n} universes shown", fontsize=9,
-                 pad=20)
+    ax.set_title(f"{claim.label()}: holds in {sum(held)} of {n} specifications shown",
+                 fontsize=9, pad=20)
     ax.set_ylabel({"ratio": "random / avoidance", "shrink": "shrink", "share": "share < 30 goals",
                    "min": "fewest goals"}[claim.kind], fontsize=8)
     ax.legend(fontsize=7, loc="lower left", bbox_to_anchor=(0.0, 1.0), ncol=4, frameon=False,
               borderaxespad=0.1)
-    cells = np.array([[pts[j].codes[claim.robot][i] > 0 for j in range(n)] for i in rows])
-    grid.pcolormesh(np.arange(n + 1) - 0.5, np.arange(len(rows) + 1) - 0.5, cells,
+    grid.pcolormesh(np.arange(n + 1) - 0.5, np.arange(len(cells) + 1) - 0.5, np.array(cells),
                     cmap="Greys", vmin=0, vmax=1.6, edgecolors="w", linewidth=0.3 if n < 80 else 0)
-    grid.set_ylim(len(rows) - 0.5, -0.5)
-    grid.set_yticks(range(len(rows)))
-    grid.set_yticklabels([factor_list[i].key + (" (inert)" if study.levels(
-        factor_list[i], claim.robot).source == "inert" else "") for i in rows], fontsize=7)
+    grid.set_ylim(len(cells) - 0.5, -0.5)
+    grid.set_yticks(range(len(cells)))
+    grid.set_yticklabels(labels, fontsize=7)
     grid.set_xticks([])
-    grid.set_xlabel("universes, by the statistic (grid: dark = the factor's alternative level)",
-                    fontsize=8)
+    grid.set_xlabel("specifications (universe and definition), by the statistic (grid: dark = "
+                    "the alternative level)", fontsize=8)
     with warnings.catch_warnings():  # tight_layout and the grid's axes: harmless
         warnings.simplefilter("ignore", UserWarning)
         return report.save(fig, path)
@@ -141,7 +149,7 @@ def deciding(a, factor_list, chosen):
     every universe judged."""
     if not a["judged"] or a["holds"] in (0, a["judged"]):
         return None
-    keys = [f.key for f in factor_list if f in chosen]
+    keys = mv.keys(factor_list, chosen)
     gaps = [abs(p - q) if p is not None and q is not None else -1 for p, q in a["holds_by_level"]]
     i = int(np.argmax(gaps))
     return (keys[i], *a["holds_by_level"][i])
@@ -159,7 +167,8 @@ def claims_table(analysis, factor_list, chosen, universes, records):
              "|---|---:|---|---|---|---|---|"]
     for c in mv.CLAIMS:
         a = analysis[c.key]
-        cells = [_claim_cell(c, (records.get(u.name) or {}).get("claims", {}).get(c.key)
+        cells = [_claim_cell(c, (records.get((u.name, mv.DEFINITIONS[0])) or {})
+                             .get("claims", {}).get(c.key)
                              if u else None) for u in marked.values()]
         share = "-" if a["share"] is None else \
             f"{a['holds']}/{a['judged']} ({a['share_ci'][0]:.0%}-{a['share_ci'][1]:.0%})"
@@ -196,36 +205,45 @@ def plain_words(analysis, factor_list, chosen):
 
 def figures_table(universes, records):
     """The twelve figures: the paper's, the literal and the current protocol's, and their
-    spread over the design's complete universes."""
+    spread over the design's complete universes; steps per trial and the shrink under
+    each definition of steps per trial."""
     from experiments import paper
     marked = [next((u for u in universes if m in u.marks), None) for m in ("literal", "current")]
-    rows = [u for u in universes if u.row is not None and records.get(u.name)]
-    lines = ["| robot | condition | figure | paper | literal | current | universes: median "
-             "(5%-95%) | within 1.5x of the paper |", "|---|---|---|---:|---:|---:|---|---:|"]
+    lines = ["| robot | condition | figure | steps per trial | paper | literal | current | "
+             "universes: median (5%-95%) | within 1.5x of the paper |",
+             "|---|---|---|---|---:|---:|---:|---|---:|"]
     for key in mv.FIGURES:
         robot, condition, figure = key
         ref = paper.RESULTS[(robot, condition)][figure]
         ref = ref["mean"] if isinstance(ref, dict) else ref
         log = figure == "shrink"
-        cells = [_v((records.get(u.name) or {}).get("figures", {}).get(key, (None,))[0], log)
-                 if u else "-" for u in marked]
-        values = np.array([records[u.name]["figures"][key][0] for u in rows
-                           if records[u.name]["figures"].get(key, (None,))[0] is not None])
-        if len(values):
-            q = np.percentile(values, [5, 50, 95])
-            spread = f"{_v(q[1], log)} ({_v(q[0], log)}-{_v(q[2], log)})"
-            within = f"{int(np.sum((values >= ref / 1.5) & (values <= ref * 1.5)))}/{len(values)}"
-        else:
-            spread, within = "-", "-"
-        lines.append(f"| {robot} | {condition} | {figure.replace('_', ' ')} | {_v(ref, log)} | "
-                     + " | ".join(cells) + f" | {spread} | {within} |")
+        definitions = mv.DEFINITIONS if figure != "first_trial_steps" else mv.DEFINITIONS[:1]
+        for d in definitions:
+            rows = [records[(u.name, d)] for u in universes
+                    if u.row is not None and records.get((u.name, d))]
+            cells = [_v((records.get((u.name, d)) or {}).get("figures", {}).get(key, (None,))[0],
+                        log) if u else "-" for u in marked]
+            values = np.array([r["figures"][key][0] for r in rows
+                               if r["figures"].get(key, (None,))[0] is not None])
+            if len(values):
+                q = np.percentile(values, [5, 50, 95])
+                spread = f"{_v(q[1], log)} ({_v(q[0], log)}-{_v(q[2], log)})"
+                within = (f"{int(np.sum((values >= ref / 1.5) & (values <= ref * 1.5)))}/"
+                          f"{len(values)}")
+            else:
+                spread, within = "-", "-"
+            lines.append(f"| {robot} | {condition} | {figure.replace('_', ' ')} | "
+                         f"{d if len(definitions) > 1 else '-'} | {_v(ref, log)} | "
+                         + " | ".join(cells) + f" | {spread} | {within} |")
     return "\n".join(lines)
 
 
 def effects_tables(analysis, factor_list, chosen, top=3):
-    keys = [f.key for f in factor_list if f in chosen]
+    keys = mv.keys(factor_list, chosen)
     lines = ["Main effects (a ratio or a shrink: the statistic at the alternative level over "
-             "the plain one; the share: its difference; the fewest goals: goals):", "",
+             "the plain one; the share: its difference; the fewest goals: goals; "
+             f"`{mv.CHOICE}`: the definition, budget over goals against the mean of the "
+             "completed trials, '-' where it does not act):", "",
              "| factor | " + " | ".join(c.key for c in mv.CLAIMS) + " |",
              "|---|" + "---:|" * len(mv.CLAIMS)]
     for i, k in enumerate(keys):
@@ -310,6 +328,35 @@ class Context:
     steps_by_robot: dict
     figures: dict
     failed: list
+    records_folder: str = ""
+    unused: int = 0
+
+
+def protocols_text(universes, factor_list):
+    """Which universe each protocol is, from tasks.protocols as it stands: the literal
+    one the design's all-plain row (u001), the adopted one the universe at each factor's
+    adopted level (a row of the design, or `current` beside it), its levels named."""
+    from tasks.protocols import PROTOCOL_VERSION
+    from tasks.robots import PAPER_ROBOTS
+    literal = next((u for u in universes if "literal" in u.marks), None)
+    current = next(u for u in universes if "current" in u.marks)
+    up = []
+    for i, f in enumerate(factor_list):
+        robots = [r for r in PAPER_ROBOTS if current.codes[r][i] > 0]
+        if robots:
+            up.append(f"`{f.key}`" + ("" if len(robots) == len(PAPER_ROBOTS)
+                                      else f" (the {', '.join(robots)} robot's)"))
+    where = (f"the design's row {current.row + 1} ({current.name})" if current.row is not None
+             else f"`{current.name}`, run beside the design (no row of the design gives "
+                  "its readings: its levels may differ between the robots, and a value it "
+                  "gives as a number, as the two-wheel radius 1.5, the plain level leaves to "
+                  "the robot file, which need not run the same bits)")
+    return (("The literal protocol (`ebrl run --protocol literal`) is u001, every factor "
+             "plain. " if literal is not None else "")
+            + f"The current protocol (`ebrl run`, the adopted readings of protocol "
+            f"{PROTOCOL_VERSION}) is {where}: at the alternative level "
+            + (", ".join(up) if up else "no factor") + ", every other factor plain; its "
+            "runs are the adopted protocol's, bit for bit (tests/test_multiverse.py).")
 
 
 def markdown(ctx):
@@ -318,7 +365,7 @@ def markdown(ctx):
     seed_text = f"{seeds[0]}-{seeds[-1]}" if seeds == list(range(seeds[0], seeds[-1] + 1)) \
         else ",".join(map(str, seeds))
     design_rows = [u for u in ctx.universes if u.row is not None]
-    complete = sum(1 for u in ctx.universes if ctx.records.get(u.name))
+    complete = sum(1 for u in ctx.universes if ctx.records.get((u.name, mv.DEFINITIONS[0])))
     current = next(u for u in ctx.universes if "current" in u.marks)
     lines = ["# How much the conclusions depend on the open details", "",
              f"Protocol {PROTOCOL_VERSION}; runs made at commit(s) {', '.join(ctx.commits) or '-'}; "
@@ -330,9 +377,17 @@ def markdown(ctx):
              "so that no main effect or two-factor interaction is aliased with another; "
              f"{len(design_rows)} of its {ctx.design.runs} universes run"
              + ("" if current.row is not None else ", and the current protocol beside them")
-             + f"; {complete} complete. Universe u001 is every factor plain: the literal "
-             f"protocol; the current protocol is {current.name}. Every universe runs both "
-             "paper robots in both conditions.", "",
+             + f"; {complete} complete. Every universe runs both paper robots in both "
+             f"conditions, and each claim of steps per trial is judged under both its "
+             f"definitions (`{mv.CHOICE}`: an analysis choice, computed from the same runs).",
+             "", protocols_text(ctx.universes, ctx.factor_list), "",
+             f"**The data**: the runs' records in {ctx.records_folder or 'OUT/records'} "
+             "(experiments/studies/multiverse_records.py: each run's parameters' digest, its "
+             "trials and its goals), from which this page is made with no run (`ebrl "
+             "multiverse --report-only`)"
+             + (f"; {ctx.unused:,} records there belong to no run of this plan (another "
+                "adopted protocol's levels, other seeds) and are left out" if ctx.unused else "")
+             + ".", "",
              "## The factors", "",
              "Plain: the literal protocol's reading. Alternative: the adopted protocol's where "
              "it differs (adopted), else the other reading the text allows (alternative). "
@@ -353,8 +408,9 @@ def markdown(ctx):
              "## Specification curves", "",
              "Each claim's statistic in every complete universe, sorted (green: holds; red: "
              "fails), with its interval, the paper's value (dashed) and the claim's bar "
-             "(dotted); the literal protocol a star, the current a diamond; below, the "
-             "factors at their alternative level (dark).", ""]
+             "(dotted); the literal protocol a star, the current a diamond (under the plain "
+             "definition of steps per trial); below, the factors at their alternative level "
+             "and the definition at budget over goals (dark).", ""]
     for key, path in ctx.figures.items():
         lines += [f"![{key}]({path})", ""]
     lines += ["## Cost", ""] + cost_text(ctx.n_runs, ctx.seconds, ctx.timing, ctx.bench,
@@ -362,9 +418,10 @@ def markdown(ctx):
     if ctx.failed:
         lines += ["## Failed runs (their universes left out)", ""]
         lines += [f"- {n}: {e}" for n, e in ctx.failed] + [""]
-    lines += ["The table: multiverse.csv (one row per universe, in the order they run: its "
-              "design row in standard order, its factors' codes, each robot's readings, the "
-              "twelve figures and the ten claims with their 95% intervals).", ""]
+    lines += ["The table: multiverse.csv (one row per universe and definition of steps per "
+              "trial, in the order they run: its design row in standard order, its factors' "
+              "codes, each robot's readings, the twelve figures and the ten claims with their "
+              "95% intervals).", ""]
     return "\n".join(lines)
 
 

@@ -7,7 +7,7 @@ import re
 import numpy as np
 
 from experiments import paper
-from experiments.outputs import page, verdicts
+from experiments.outputs import page, verdict_tables, verdicts
 from experiments.running import lock, provenance, results
 from tasks.robots import DRIVES
 
@@ -66,7 +66,12 @@ def interval(ci, digits=0):
 
 
 def comparison_rows(summary):
-    """One row per (group, figure): paper, ours, 95% CI, ratio, paper inside the CI."""
+    """One row per (group, figure): paper, ours, 95% CI, ratio, and the verdict of the
+    figure's tests against the paper (summary["tests"], experiments.outputs.verdicts)."""
+    tests = summary["tests"]
+    judged = {(r["robot"], r["condition"], r["figure"]): r["verdict"] for r in tests["figures"]}
+    judged.update({(r["robot"], r["condition"], "shrink (per trial / first)"): r["verdict"]
+                   for r in tests["shrinks"]})
     rows = []
     for g in summary["groups"]:
         ref = paper_figures(g)
@@ -84,21 +89,21 @@ def comparison_rows(summary):
                 "paper_sd": ref[key].get("sd") if ref and isinstance(ref[key], dict) else None,
                 "ours": ours, "sd": sd, "ci95": ci, "digits": digits,
                 "ratio": (ours / theirs) if ours is not None and theirs else None,
-                "inside": (ci[0] <= theirs <= ci[1]) if ci and theirs is not None else None,
+                "verdict": judged.get((g["robot"], g["condition"], label))
+                if ref is not None else None,
             })
     return rows
 
 
 def comparison_table(summary):
-    lines = ["| robot | condition | figure | paper | ours (sd) | ours 95% CI | ours / paper | paper in CI |",
-             "|---|---|---|---:|---:|---|---:|:-:|"]
+    lines = ["| robot | condition | figure | paper | ours (sd) | ours 95% CI | ours / paper "
+             "| the tests' verdict |", "|---|---|---|---:|---:|---|---:|---|"]
     for r in comparison_rows(summary):
         d = r["digits"]
         paper_txt = fmt(r["paper"], d) + (f" ({fmt(r['paper_sd'])})" if r["paper_sd"] else "")
         ours_txt = fmt(r["ours"], d) + (f" ({fmt(r['sd'])})" if r["sd"] is not None else "")
-        inside = "-" if r["inside"] is None else ("yes" if r["inside"] else "no")
         lines.append(f"| {r['robot']} | {r['condition']} | {r['figure']} | {paper_txt} | {ours_txt} "
-                     f"| {interval(r['ci95'], d)} | {fmt(r['ratio'], 2)} | {inside} |")
+                     f"| {interval(r['ci95'], d)} | {fmt(r['ratio'], 2)} | {r['verdict'] or '-'} |")
     return "\n".join(lines)
 
 
@@ -115,47 +120,15 @@ def goals_table(summary):
 
 
 def claims(summary):
-    """Section 3.6's qualitative claims for each robot, against its drive's figures,
-    each as (claim, ours, verdict)."""
-    by = {(g["robot"], g["condition"]): g for g in summary["groups"]}
-    out = []
-    for robot in dict.fromkeys(g["robot"] for g in summary["groups"]):
-        r, a = by.get((robot, "random")), by.get((robot, "avoidance"))
-        if not (r and a) or paper_figures(r, "random") is None:
-            continue
-        ref = {c: paper.RESULTS[(r["drive"], c)] for c in paper.CONDITIONS}
-        factor = ref["random"]["first_trial_steps"]["mean"] / ref["avoidance"]["first_trial_steps"]["mean"]
-        fr, fa = r["first_trial_steps"]["mean"], a["first_trial_steps"]["mean"]
-        pr, pa = r["steps_per_trial"]["mean"], a["steps_per_trial"]["mean"]
-        if fr and fa:
-            out.append((f"{robot}: avoidance cuts first-trial steps (paper {factor:.1f}x)",
-                        f"{fr / fa:.1f}x", fa < fr))
-        if pr and pa:
-            out.append((f"{robot}: avoidance cuts steps per trial",
-                        f"{pr / pa:.1f}x", pa < pr))
-        for g in (r, a):
-            shrink = ref[g["condition"]]["shrink"]
-            if g["shrink"] is not None:
-                ci = g["shrink_ci95"]
-                out.append((f"{robot} {g['condition']}: learning shrinks trials (paper {shrink:.0%})",
-                            f"{g['shrink']:.0%}" + (f" (95% CI {ci[0]:.0%}-{ci[1]:.0%})" if ci else ""),
-                            (ci[1] < 1.0) if ci else g["shrink"] < 1.0))
-        if r["drive"] == "two_wheel" and r["steps"] == a["steps"] == DRIVES["two_wheel"].budget:
-            goals = paper.TWO_WHEEL_GOALS
-            out.append((f"{robot} random: most runs reach fewer than 30 goals in 30,000 steps "
-                        f"(paper {goals['random_below_30']}/50)",
-                        f"{r['goals']['below_30']}/{r['seeds']}", r["goals"]["below_30"] > r["seeds"] / 2))
-            out.append((f"{robot} avoidance: every run reaches at least {goals['avoidance_min']} "
-                        f"goals (paper min {goals['avoidance_min']})",
-                        f"min {a['goals']['min']}", a["goals"]["min"] >= goals["avoidance_min"]))
-    return out
+    """Section 3.6's qualitative claims for each robot, each judged by a test on our runs
+    (verdicts.claim_tests), as (claim, ours with the test's p, holds)."""
+    return [(c["claim"], f"{c['ours']}, {c['test']} p {verdict_tables.p_text(c['p'])}",
+             c["holds"]) for c in verdicts.claim_tests(summary)]
 
 
 def claims_table(summary):
-    lines = ["| claim | ours | holds |", "|---|---|:-:|"]
-    for claim, ours, ok in claims(summary):
-        lines.append(f"| {claim} | {ours} | {'yes' if ok else 'no'} |")
-    return "\n".join(lines)
+    """The claims' table from the summary's tests (verdicts.tested)."""
+    return verdict_tables.claims_table(summary["tests"]["claims"])
 
 
 # -- figures ----------------------------------------------------------------------
@@ -371,13 +344,13 @@ def publish(root, results_md, figures_dir, section=None):
     pngs = sorted((root / "figures").glob("*.png"))
     if section is None:
         block += ["### Section 3.6, the paper against ours", "", comparison_table(summary), "",
-                  *verdicts.section(summary["tests"], "###"),
+                  *verdict_tables.section(summary["tests"], "###"),
                   "### Goals within the budget", "", goals_table(summary), "",
                   "### Qualitative claims", "", claims_table(summary), ""]
         if "optimal" in summary:
             block += ["### Against the optimal path", "", optimal_table(summary["optimal"]), ""]
     else:  # a section beside the main block: the tests, the claims, the learning curves
-        block += [*verdicts.section(summary["tests"], "###"),
+        block += [*verdict_tables.section(summary["tests"], "###"),
                   "### Qualitative claims", "", claims_table(summary), ""]
         pngs = [p for p in pngs if p.name.startswith("cumulative_reward")]
     for png in pngs:  # only the figures the block shows: a section's never replace others
@@ -450,7 +423,7 @@ def build(root, room=False):
         "versions.lock: the first 12 hex digits of its sha256).", "",
         *failed_section(summary), *damaged_section(summary),
         "## Section 3.6 figures", "", comparison_table(summary), "",
-        *verdicts.section(summary["tests"]),
+        *verdict_tables.section(summary["tests"]),
         "## Goals within the budget", "", goals_table(summary), "",
         "## Qualitative claims", "", claims_table(summary), *extra, "",
         "## Figures", "",

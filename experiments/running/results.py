@@ -193,14 +193,14 @@ def read_run_json(path):
 
 
 class DamagedFile(ResultsError):
-    """A file the tool wrote and reads back (summary.json, a study's timing.json or
-    bench.json) that cannot be read or is not of its kind's shape: the message names the
-    file and what is wrong (schema.read_json)."""
+    """A file the tool wrote and reads back (summary.json, a multiverse folder's
+    bench.json, a fit's validation.json) that cannot be read or is not of its kind's
+    shape: the message names the file and what is wrong (schema.read_json)."""
 
 
 def read_file(path, check):
-    """The JSON file at path checked by check (schema.check_summary, check_timing,
-    check_bench): the one reader of the files the tool reads back; DamagedFile naming
+    """The JSON file at path checked by check (schema.check_summary, check_bench,
+    check_validation): the one reader of the files the tool reads back; DamagedFile naming
     the file when it cannot be read or is not of its shape."""
     try:
         return schema.read_json(path, check)
@@ -209,8 +209,8 @@ def read_file(path, check):
 
 
 def read_bookkeeping(path, check):
-    """A study folder's bookkeeping file (timing.json, bench.json) read through read_file:
-    its value, or None when there is none; a damaged one is moved aside to
+    """A study folder's bookkeeping file (bench.json, validation.json) read through
+    read_file: its value, or None when there is none; a damaged one is moved aside to
     PATH.damaged-<time> (schema.move_aside, never deleted) with one warning line naming
     it, and the caller makes it again."""
     path = pathlib.Path(path)

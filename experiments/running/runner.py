@@ -101,10 +101,12 @@ def input_error(error):
     return error.with_traceback(None)
 
 
-def run(specs, out, *, workers=None, backend="local", progress=True):
+def run(specs, out, *, workers=None, backend="local", progress=True, written=None):
     """Runs the specs not yet done under out (a folder, or a function spec -> folder;
     failed and damaged ones again), after checking them (check); returns a Ran. A worker
-    that raises one of INPUT_ERRORS stops the command with that error."""
+    that raises one of INPUT_ERRORS stops the command with that error. written(spec,
+    run, result), if given, is called after each complete run's files are written (a
+    study's own record of it: experiments.studies.multiverse_records)."""
     where = folder_of(out)
     check(specs)
     todo = pending(where, specs)
@@ -127,7 +129,9 @@ def run(specs, out, *, workers=None, backend="local", progress=True):
         if error is not None:
             failed.append((spec, results.write_failure(where(spec), spec, error)))
         else:
-            results.write_run(where(spec), spec, result, versions)
+            run = results.write_run(where(spec), spec, result, versions)
+            if written is not None:
+                written(spec, run, result)
             steps_done += result.get("steps_run", spec.steps)
         if bar is not None:
             rate = steps_done / max(time.perf_counter() - started, 1e-9)

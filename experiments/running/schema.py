@@ -324,25 +324,6 @@ def check_summary(summary):
     return summary
 
 
-def check_timing(sessions):
-    """A multiverse folder's timing.json: a list of its calls, each its wall seconds,
-    workers and either the runs it made or interrupted."""
-    if not isinstance(sessions, list):
-        raise Damaged(f"it holds {_name(sessions)}, not a list of calls")
-    for i, s in enumerate(sessions):
-        where = f"[{i}]."
-        if not isinstance(s, dict):
-            raise Damaged(f"[{i}] is {_name(s)}, not an object")
-        seconds = _typed(s, "seconds", where, (int, float), "a number", optional=False)
-        if not math.isfinite(seconds) or seconds < 0:
-            raise Damaged(f"{where}seconds is {seconds}, not a non-negative number")
-        _integer(s, "workers", where, low=1)
-        if s.get("interrupted") is not True:
-            for key in ("runs_made", "on_disk", "failed"):
-                _integer(s, key, where)
-    return sessions
-
-
 def check_bench(rows, robots=()):
     """A multiverse folder's bench.json: for each robot (given, and any it holds), ebrl
     bench's measure, an object whose fused_loop is a number."""

@@ -1,8 +1,9 @@
 """`ebrl multiverse`: the protocol in every combination of the readings the text allows.
 
-A factor is an open detail that the paper's text allows two readings of (or a group of
-details read together, the bodies' open values), with its two levels, both taken from
-the readings' registry (tasks.readings) and the protocols (tasks.protocols):
+A factor is an open detail of the paper's text (or one the text gives two ways, where it
+contradicts itself: its sentence quotes both), or a group of details read together (the
+bodies' open values), with its two levels, both taken from the readings' registry
+(tasks.readings) and the protocols (tasks.protocols):
 
 - **plain** (-1): the literal protocol's value of each of its readings (tasks.protocols.
   LITERAL, the paper as written);
@@ -11,21 +12,24 @@ the readings' registry (tasks.readings) and the protocols (tasks.protocols):
   reading too, the factor's own alternative (FACTORS: a value of the registry, checked
   there). A factor that changes nothing for a robot is inert there (reported).
 
-FACTORS lists them by hand with the sentence of the paper each reads; a reading that the
-adopted protocol sets apart from the literal one and no factor names becomes a factor of
-its own (`factors`), so that every universe the protocols are is in the design, and a new
-protocol changes the factors' levels and count without an edit here. The design is a
-two-level fractional factorial of resolution V or better over the chosen factors
-(experiments.studies.design); its first row is every factor plain: the literal protocol.
-The current protocol (the adopted one) is the universe with each factor at the adopted
-protocol's level; where no row of the design is it, it runs beside them ("current").
+FACTORS lists them by hand with the sentence of the paper each reads; no factor varies a
+value the paper states or an equation it prints (HELD_PLAIN, each with its reason). A
+reading that the adopted protocol sets apart from the literal one and no factor names
+becomes a factor of its own (`factors`), so that every universe the protocols are is in
+the design, and a new protocol changes the factors' levels and count without an edit
+here. The design is a two-level fractional factorial of resolution V or better over the
+chosen factors (experiments.studies.design); its first row is every factor plain: the
+literal protocol. The current protocol (the adopted one) is the universe at each factor's
+adopted level giving the adopted protocol's own values; where no row of the design is
+it, it runs beside them ("current").
 
 Every universe runs under the adopted protocol with its factors' readings set (--set,
 RunSpec.overrides: every factor reading that acts on the robot and condition, so a
 universe is the same runs whatever its readings that do not act there). A run's folder
 is OUT/runs/<digest of its overrides>/<robot>/<condition>/seed_NNN, as `ebrl run` writes
-it, so a run that several universes share is made once, and a rerun makes only what is
-missing (results.existing), on one worker pool or Ray (runner.run).
+it, so a run that several universes share is made once; each finished run also leaves
+its record (experiments.studies.multiverse_records), which is what the analysis reads
+and a resume skips, on this machine or another.
 """
 import dataclasses
 import functools
@@ -68,7 +72,8 @@ def _one(name, alternative, label, sentence):
 
 #: The factors, hand-listed (docs/interpretation.md, "The multiverse", has each with the
 #: reason its alternative is a reading of the text). Every value is checked against the
-#: registry (tests/test_multiverse.py).
+#: registry (tests/test_multiverse.py). None varies a value the paper states or an
+#: equation it prints; a factor read from a contradiction in the text quotes both sides.
 FACTORS = (
     Factor("threshold", "eq 5's 'enough value': the policy threshold (and eq 6's cutoff)",
            _both("policy_threshold", "utility_cutoff"),
@@ -82,13 +87,12 @@ FACTORS = (
          '... Reliability is modified also in the process of learning"; Section 4: "The '
          'initial values of learning variables should also be set up appropriately"'),
     _one("eq7_signal", "surprise_measure",
-         "eq 7's r: the reward, or the reward less the expected one",
-         'Section 2.4: "the reliability of memory element that the agent referred for decision '
-         'should be modified according to the difference between real and expected reward '
-         'values"'),
-    _one("eq7_walk", "discounted", "eq 7's walk back: undiscounted, or discounted as eq 6's",
-         'Section 2.4: "This operation is also done by following the backward links starting '
-         'from the memory element employed to decide the last action."'),
+         "eq 7's r: the reward as printed, or the reward less the expected one as the "
+         "sentence before it says (the text contradicts itself)",
+         'Section 2.4, the sentence before eq 7: "the reliability of memory element that the '
+         'agent referred for decision should be modified according to the difference between '
+         'real and expected reward values"; against it, eq 7 as printed: "rho r_t (1 - R_i)" '
+         'with r_t eq 6\'s "current reward"'),
     _one("eq7_scope", "decided_only",
          "eq 7 walks to the episode's start, or changes deciding elements only",
          'Section 2.4: "the reliability of memory element that the agent referred for decision '
@@ -107,20 +111,47 @@ FACTORS = (
          'Section 3.4: "We should introduce some probability of random action to avoid this '
          'drawback. Here we set the probability to be 20%"'),
     Factor("body", "the bodies' open values: the plain body, or the adopted (fitted) one",
-           {"two_wheel": ("radius", "blocked_move"),
+           {"two_wheel": ("radius", "leftover_turn"),
             "floating": ("radius", "action_noise", "velocity_noise", "velocity_code")},
-           (),
-           'Section 3.3: "If the agent cannot move any more because of collision with an '
-           'object, the rest portion of move is transferred into the angle of turn"; the '
-           'radius, the floating robot\'s action noise and its velocity sensing are not '
-           'given ("it can also detect the velocity")'),
-    Factor("turn_or_dead_zone", "a blocked move's leftover turn (two-wheel); eq 9's dead "
-           "zone (floating)",
-           {"two_wheel": ("leftover_turn",), "floating": ("eq9_dead_zone",)},
-           (("leftover_turn", "away"), ("eq9_dead_zone", "zero")),
+           # where the adopted two-wheel body is the plain one: the rest turned away
+           (("leftover_turn", "away"),),
            'Section 3.3: "the rest portion of move is transferred into the angle of turn" '
-           '(which way, open); eq 9: "not changed, otherwise"'),
+           '(which way, not given); the radius, the floating robot\'s action noise and its '
+           'velocity sensing ("it can also detect the velocity") are not given'),
+    _one("eq9_dead_zone", "zero", "eq 9's 'not changed': the previous acceleration kept, or "
+         "none", 'Section 3.4, eq 9: "not changed, otherwise"'),
+    _one("thrust", "demand",
+         "the floating robot's velocity change for a demand a: 0.2 a (the stated maximum), "
+         "or a itself (the example; the text contradicts itself)",
+         'Section 3.3: "We set the maximum value of acceleration as 0.2 units per square '
+         'step"; against it, its example: "the action demand (-0.2, 0.3) means that the '
+         'horizontal factor of velocity decreases by 0.2 and the vertical factor of velocity '
+         'increases by 0.3"'),
 )
+
+#: The readings no factor varies, each with its reason (docs/interpretation.md, "The
+#: multiverse": "Held plain"): the paper states its value or prints its equation, or its
+#: plain reading leaves nothing to vary. With FACTORS' readings, every reading of the
+#: registry (tests/test_multiverse.py).
+HELD_PLAIN = {
+    "blocked_move": 'stated, Section 3.3: the robot moves until it touches and "the rest '
+                    'portion of move is transferred into the angle of turn"',
+    "random_demand": "stated, Section 3.4: every random action's Gaussian of sd 0.5",
+    "forgetting": 'stated, Section 2.1: "it forgets a memory element of the lowest '
+                  'reliability"',
+    "eq7_walk": 'printed, eq 7 has no discount; "also done by following the backward links" '
+                "says which elements, not a gamma",
+    "bump": '"moves constantly by its own velocity until it bumps against a wall": the '
+            "motion ends at the bump",
+    "episode": "Section 3.6's trials each run from the start to the goal: an episode across "
+               "the goal reads against them",
+    "recall_at_trial_end": "keep made the same runs bit for bit as empty (protocol 5's "
+                           "ablation)",
+    "variance_floor": "a numerical guard (V_i = 0 divides by zero)",
+    "initial_utility": "no reward seen yet",
+    "wall_friction": "acts only under walls (bump=grip) the plain reading does not take",
+    "restitution": "acts only under walls (bump=bounce) the plain reading does not take",
+}
 
 #: A None reading's value, for the paper's robots (the registry's "the robot file's"):
 #: their files' hull radius (read from the file) and the bumper's friction, 1.
@@ -224,12 +255,16 @@ def select(keys=None):
 @dataclasses.dataclass(frozen=True)
 class Universe:
     """One combination of the factors' levels: its name, each robot's code (+1 or -1 per
-    factor of factors(), in order), its design row (None beside the design) and its marks
-    ("literal", "current")."""
+    factor of factors(), in order), its design row (None beside the design), its marks
+    ("literal", "current") and, for the current protocol beside the design, adopted: its
+    readings are the adopted protocol's own values (the codes say its levels): a value
+    that only equals the plain one as run (the file's radius None and 1.5) need not give
+    the same bits, and the current universe is the adopted protocol's runs."""
     name: str
     codes: dict
     row: int = None
     marks: tuple = ()
+    adopted: bool = False
 
     def readings(self, robot):
         """{reading: value} of the universe's factor readings for a robot."""
@@ -237,6 +272,8 @@ class Universe:
         for factor, code in zip(factors(), self.codes[robot]):
             lv = levels(factor, robot)
             out.update(lv.alternative if code > 0 else lv.plain)
+        if self.adopted:
+            out = {n: adopted_value(robot, n) for n in out}
         return out
 
     def overrides(self, robot, condition):
@@ -281,7 +318,8 @@ def universes(chosen, count=None):
         full = tuple(code.get(f.key, -1) for f in factors())
         out.append(Universe(f"u{len(out) + 1:03d}", {r: full for r in PAPER_ROBOTS}, row,
                             ("literal",) if row == 0 else ()))
-    current = Universe("current", {r: current_codes(r) for r in PAPER_ROBOTS}, None, ("current",))
+    current = Universe("current", {r: current_codes(r) for r in PAPER_ROBOTS}, None,
+                       ("current",), adopted=True)
     same = next((u for u in out if all(u.readings(r) == current.readings(r)
                                        for r in PAPER_ROBOTS)), None)
     if same is not None:
@@ -312,7 +350,7 @@ def root_of(out, spec):
     return pathlib.Path(out) / "runs" / folder_key(spec.overrides)
 
 
-def plan(out, all_universes, seeds, steps=None):
+def plan(all_universes, seeds, steps=None):
     """Every universe's runs once (a run that universes share is one spec), the longest
     first."""
     unique = {}
@@ -322,46 +360,42 @@ def plan(out, all_universes, seeds, steps=None):
     return sorted(unique, key=lambda s: -s.steps)
 
 
-def check_on_disk(out, all_universes, seeds, steps=None):
-    """ResultsError when a run folder under out holds a run made with other parameters
-    (another --steps, say), found before any work and without writing anything (damaged
-    folders are left for run to set aside)."""
-    runner.pending(functools.partial(root_of, out), plan(out, all_universes, seeds, steps),
-                   mend=False)
+def check_on_disk(out, specs):
+    """ResultsError when a run folder under OUT/runs holds a run of specs made with other
+    parameters (another --steps, say), found before any work and without writing anything
+    (damaged folders are left for run to set aside)."""
+    runner.pending(functools.partial(root_of, out), specs, mend=False)
 
 
-def run(out, all_universes, seeds, steps=None, workers=None, backend="local", progress=True):
-    """Runs what is not on disk (ResultsError first if a folder holds other runs);
-    returns runner.Ran."""
-    specs = plan(out, all_universes, seeds, steps)
+def run(out, specs, workers=None, backend="local", progress=True, written=None):
+    """Runs the specs whose folder under OUT/runs holds no complete run (ResultsError
+    first if a folder holds other runs); written(spec, run, result) after each run is
+    written (its record: experiments.studies.multiverse_records). Returns runner.Ran."""
     where = functools.partial(root_of, out)
     runner.pending(where, specs)  # a damaged or mismatched folder stops it before any run
-    return runner.run(specs, where, workers=workers, backend=backend, progress=progress)
+    return runner.run(specs, where, workers=workers, backend=backend, progress=progress,
+                      written=written)
 
 
-def collect(out, all_universes, seeds, steps=None):
-    """What is on disk: {universe name: its runs ((robot, condition, seed) -> run.json)
-    when every one is complete, else None}, the failed runs' (folder, error) pairs, each
-    distinct complete run's recorded seconds, and the commits the runs were made at."""
-    made, failed, commits = {}, {}, set()
-    for spec in plan(out, all_universes, seeds, steps):
+def failed(out, specs):
+    """(run folder, error) of the specs whose run under OUT/runs failed (a rerun retries
+    it)."""
+    errors = []
+    for spec in specs:
         root = root_of(out, spec)
-        state = results.existing(root, spec)
-        folder = results.run_dir(root, spec)
-        if state == "done":
-            made[spec] = results.read_run_json(folder / "run.json")
-            try:
-                config = json.loads((folder / "config.json").read_text())
-                commits.add(config["versions"]["git_commit"])
-            except (OSError, ValueError, KeyError, TypeError):
-                commits.add("unknown")
-        elif state == "failed":
-            failed[f"runs/{root.name}/{spec.name}"] = \
-                results.read_run_json(folder / "run.json")["error"]
+        if results.existing(root, spec) == "failed":
+            run_json = results.run_dir(root, spec) / "run.json"
+            errors.append((f"runs/{root.name}/{spec.name}",
+                           results.read_run_json(run_json)["error"]))
+    return errors
+
+
+def gather(all_universes, seeds, steps, made):
+    """{universe name: its runs' records ((robot, condition, seed) -> record) when every
+    one is made, else None}, from made: {spec: record}."""
     data = {}
     for u in all_universes:
         specs = [s for group in specs_of(u, seeds, steps).values() for s in group]
         data[u.name] = ({(s.label, s.condition, s.seed): made[s] for s in specs}
                         if all(s in made for s in specs) else None)
-    seconds = [float(r.get("seconds", 0.0)) for r in made.values()]
-    return data, sorted(failed.items()), seconds, sorted(commits)
+    return data

@@ -251,21 +251,30 @@ def kinematic_record(seeds, radius, steps=BUDGET, sd=SD, refuse=False, goal=True
             "blocked": per[:, 3] > 0, "first": first, "coverage": np.array(cover)}
 
 
-def wall_test(angles=(90, 60, 45, 30, 15, 5), gap=0.1, task_overrides=()):
-    """What one full move (a = 0, no noise) does to the MuJoCo body started `gap` units from
-    the bottom wall, heading into it at each angle (degrees): {angle: (distance made along
-    the wall, distance made towards it, turn taken)}; Section 3.3's kinematics make
-    gap / tan(angle) along the wall and turn the rest of the 2 units."""
+def wall_ideal(deg, gap=0.1):
+    """Section 3.3's kinematics for wall_test's move: (along the wall, towards it, turn):
+    gap / tan(angle) along, gap towards, and the rest of the 2 units, 2 - gap / sin(angle),
+    turned at 1 rad per 2 units."""
+    a = math.radians(deg)
+    return gap / math.tan(a), gap, (MAX_MOVE - gap / math.sin(a)) * MAX_TURN / MAX_MOVE
+
+
+def wall_test(angles=(90, 60, 45, 30, 15, 5), gap=0.1, task_overrides=(), protocol="adopted",
+              robot="two_wheel"):
+    """What one full move (a = 0, no noise) does to a two-wheel robot (a name or file
+    tasks.load takes) whose hull is started `gap` units from the bottom wall, heading into
+    it at each angle (degrees), under a protocol's readings and the overrides: {angle:
+    (distance made along the wall, distance made towards it, turn taken)}; Section 3.3's
+    kinematics: wall_ideal."""
     import mujoco
 
     import tasks
-    from tasks.robots import ROBOTS
-    entry = ROBOTS["two_wheel"]
+    entry = tasks.resolve(robot).under(protocol)
     config = entry.task_config(**(dict(task_overrides) | {"action_noise": 0.0,
                                                           "sensor_noise": 0.0}))
     env = tasks.load(entry, seed=0, config=config)
     env.reset()
-    r = config.radius or 1.5
+    r = env.physics.robot_radius
     out = {}
     for deg in angles:
         h = -math.radians(deg)

@@ -1,7 +1,7 @@
 """MuJoCo's C functions for compiled kernels, and views of the struct fields they touch.
 
 Kernels call MuJoCo's C functions (mj_step, mj_step1, mj_step2, mj_sensorPos,
-mj_forward, mj_objectVelocity) directly on the mjModel and mjData, with no Python in
+mj_forward, mj_objectVelocity, mj_geomDistance) directly on the mjModel and mjData, with no Python in
 between. The functions are declared by symbol name (numba ExternalFunction), resolved in
 libmujoco.so, which the mujoco package has loaded; compiled kernels stay cacheable
 because they hold no addresses. Every kernel is ``@njit(cache=True)`` with no fastmath:
@@ -65,6 +65,8 @@ mj_step1 = types.ExternalFunction("mj_step1", types.void(_P, _P))
 mj_step2 = types.ExternalFunction("mj_step2", types.void(_P, _P))
 mj_sensorPos = types.ExternalFunction("mj_sensorPos", types.void(_P, _P))
 mj_forward = types.ExternalFunction("mj_forward", types.void(_P, _P))
+mj_geomDistance = types.ExternalFunction(
+    "mj_geomDistance", types.float64(_P, _P, types.intc, types.intc, types.float64, _P))
 mj_objectVelocity = types.ExternalFunction(
     "mj_objectVelocity", types.void(_P, _P, types.intc, types.intc, _P, types.intc))
 

@@ -190,6 +190,8 @@ def move(s, distance):
     t, done = 0.0, 0.0
     n = 0
     while distance - done > s.coast and t < s.max_move_seconds:
+        if family.touching(s, h0):  # Section 3.3: the move ends where the body touches
+            break
         err = remainder(h0 - heading(s), 2 * math.pi)
         r = (distance - done) / s.slow_down
         r = r if r > 0.3 else 0.3

@@ -11,7 +11,7 @@ from numba import njit
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl import records
 from tasks.kernels import two_wheel as family
-from tasks.kernels.body import BODY_FIELDS
+from tasks.kernels.body import BODY_FIELDS, base_pose
 from tasks.kernels.plan import PLAN_FIELDS, aim, phase
 from tasks.kernels.wheels import RAMP_FIELDS
 
@@ -34,11 +34,12 @@ JointMotorsRecord.constructor = njit(cache=True)(lambda *values: JointMotorsReco
 def turn(s, angle, leftover):
     """Turns by `angle` rad counter-clockwise over the turn phase."""
     aim(s, 0.0, angle * s.per_rad, s.ramp_turn)
-    return phase(s, s.n_turn)
+    return phase(s, s.n_turn, 0.0, False)
 
 
 @njit(cache=True)
 def move(s, distance):
-    """Moves `distance` units forward over the move phase."""
+    """Moves `distance` units forward over the move phase, ending where the body touches
+    the room."""
     aim(s, distance * s.joint_per_unit, 0.0, s.ramp_move)
-    return phase(s, s.n_move)
+    return phase(s, s.n_move, base_pose(s)[2], True)

@@ -120,14 +120,19 @@ def aim(s, left, right, ramp):
 
 
 @njit(cache=True)
-def phase(s, n):
+def phase(s, n, heading, watch):
     """n substeps of a phase: at each, while ramp_left[0] > 0 the two targets move by
     delta (and ramp_left counts down); the controls for them go into ctrl (`controls`);
-    one substep runs (tasks.kernels.bindings.run). Returns (the first non-OK status of
-    run (UNSTABLE), TIPPED when a free base ends the phase tilted past min_cos_tilt
-    (checked at the end, as a phase's substeps check it), else OK; n)."""
+    one substep runs (tasks.kernels.bindings.run). With `watch` (a move), the phase ends
+    where the body touches the room along `heading` (family.touching, checked before each
+    substep), the joints held there (`halt`). Returns (the first non-OK status of run
+    (UNSTABLE), TIPPED when a free base ends the phase tilted past min_cos_tilt (checked
+    at the end, as a phase's substeps check it), else OK; the substeps run)."""
     target, delta, ramp_left = s.target, s.delta, s.ramp_left
-    for _ in range(n):
+    for k in range(n):
+        if watch and family.touching(s, heading):
+            halt(s)
+            return bindings.OK, k
         if ramp_left[0] > 0:
             target[0] += delta[0]
             target[1] += delta[1]

@@ -2,13 +2,15 @@
 ``forward`` and ``turn`` (and ``grip``) drive the speed along the heading and the yaw
 rate directly (the paper's ``two_wheel`` robot; tasks.realisations.servos reads the
 model). A turn of angle A over n substeps is the yaw rate A / (n dt), a move of D units
-the speed D / (n dt); the servos are deadbeat, so the phase does it."""
+the speed D / (n dt); the servos are deadbeat, so the phase does it. A move ends where
+the body first touches the room (Section 3.3): a substep that would reach a wall goes
+just that far (tasks.kernels.two_wheel.room_ahead), and the move stops there."""
 from numba import njit
 
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl import records
 from tasks.kernels import bindings, two_wheel as family
-from tasks.kernels.body import BODY_FIELDS, step_phase
+from tasks.kernels.body import BODY_FIELDS, base_pose, step_phase
 
 
 @records.record(*BODY_FIELDS, *family.FAMILY_FIELDS, "forward_actuator", "turn_actuator",
@@ -39,10 +41,23 @@ def turn(s, angle, leftover):
 
 @njit(cache=True)
 def move(s, distance):
-    """Moves `distance` units forward over the move phase's substeps."""
+    """Moves `distance` units forward over the move phase's substeps, at one speed, until
+    the body touches the room: a substep that would go further than the room ahead
+    (family.room_ahead) goes that far, and once touching the move ends. Returns (status,
+    substeps run)."""
     n = s.n_move
-    drive(s, distance / (n * s.timestep), 0.0)
-    return step_phase(s, n), n
+    speed = distance / (n * s.timestep)
+    per = speed * s.timestep
+    _, _, heading = base_pose(s)
+    for k in range(n):
+        ahead = family.room_ahead(s, heading, 2 * per)
+        if ahead <= family.TOUCH:
+            return bindings.OK, k
+        drive(s, speed if ahead >= per else ahead / s.timestep, 0.0)
+        status = step_phase(s, 1)
+        if status != bindings.OK:
+            return status, k + 1
+    return bindings.OK, n
 
 
 @njit(cache=True)

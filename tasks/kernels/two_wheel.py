@@ -1,11 +1,15 @@
 """The two-wheel action family's step (Section 3.3), once, for every body that walks it.
 
 Action a in [-1, 1]: turn |a| rad (a < 0 left, counter-clockwise), then move 2 (1 - |a|)
-units along the new heading, each part scaled by the action noise's factor. When a
-collision stops the move, its rest becomes turn (at 1 rad per 2 units) in the commanded
-turn's direction, or away from the nearer side (leftover_turn "away"); with
-blocked_move "refuse" the move is undone first and all of it turned. Then the body
-halts.
+units along the new heading, each part scaled by the action noise's factor. "If the agent
+cannot move any more because of collision with an object, the rest portion of move is
+transferred into the angle of turn": the move ends where the body first touches a wall or
+an obstacle (`room_ahead`, `touching`: every realisation's move phase stops there), and
+its rest becomes turn (at 1 rad per 2 units) in the commanded turn's direction, or away
+from the nearer side (leftover_turn "away"). Then the body halts. (blocked_move
+"refuse", protocol 7's compensation for a body that slid along walls, is no reading of
+Section 3.3: it undoes the move and turns all of it; kept only to remake protocol 7's
+runs.)
 
 `act` is that logic. How a body turns by an angle or moves a distance is its
 realisation's: `act` takes the realisation's phases as arguments (turn, move, halt, and
@@ -29,9 +33,10 @@ from tasks.readings import codes
 #: The family's fields of a record, after tasks.kernels.body.BODY_FIELDS: the substeps of the turn
 #: and the move phases, the largest turn (rad) and move (units) per step, the tolerance
 #: (units) past which a move was blocked, the blocked-move and leftover-turn readings
-#: (BLOCKED_*, LEFTOVER_*), the state a refused move returns to (qpos, qvel, act).
+#: (BLOCKED_*, LEFTOVER_*), the state a refused move returns to (qpos, qvel, act); the
+#: pairs (robot geom, room geom) that can touch (`room_ahead`), scratch for their segment.
 FAMILY_FIELDS = ("n_turn", "n_move", "max_turn", "max_move", "tolerance", "blocked_move",
-                 "leftover_turn", "qpos0", "qvel0", "act0")
+                 "leftover_turn", "qpos0", "qvel0", "act0", "pairs", "fromto")
 
 #: The blocked-move readings' codes (tasks/readings.py): a blocked move stops at contact
 #: and its rest is turned (STOP), or is refused whole, undone, and all of it turned
@@ -41,6 +46,53 @@ BLOCKED_STOP, BLOCKED_REFUSE = codes("blocked_move", "stop", "refuse")
 LEFTOVER_COMMANDED, LEFTOVER_AWAY = codes("leftover_turn", "commanded", "away")
 #: turn_phase's `leftover`: the step's own turn, or a blocked move's leftover turn.
 OWN_TURN, LEFTOVER = False, True
+#: A body this close to the room along its heading (units) touches it: its move ends.
+TOUCH = 1e-3
+#: A pair's gap (m) within which its geoms touch at a point (mj_geomDistance's segment
+#: has no direction there).
+CONTACT = 1e-9
+
+
+# -- where the move ends ---------------------------------------------------------------------
+
+@njit(cache=True)
+def room_ahead(s, heading, reach):
+    """How far (units) the body can still move along `heading` (rad) before one of its
+    geoms touches the room (a wall or an obstacle; never the floor), looking `reach` units
+    ahead: over the pairs (robot geom, room geom) that can touch, each pair's gap (MuJoCo's
+    mj_geomDistance: negative when sunk in) over the rate at which a move along the heading
+    closes it (the horizontal part, along the heading, of the unit normal from the robot's
+    geom to the room's); pairs the move does not close are skipped. 0 when touching, inf
+    when nothing is within reach. Exact for a flat wall; short of the touch at a corner (the
+    gap is convex along the move), so going this far again and again reaches it from
+    outside. Reads the geoms' poses: the kinematics of the last substep (bindings.run ends
+    with mj_step1)."""
+    c, sn = math.cos(heading), math.sin(heading)
+    units, fromto, pairs = s.metres_to_units, s.fromto, s.pairs
+    reach_m = reach / units
+    ahead = np.inf
+    for k in range(pairs.shape[0]):
+        gap = bindings.mj_geomDistance(s.m, s.d, pairs[k, 0], pairs[k, 1], reach_m,
+                                       fromto.ctypes.data)
+        if gap >= reach_m:
+            continue
+        if abs(gap) > CONTACT:
+            # fromto runs from the robot's geom to the room's: gap times the unit normal
+            closing = ((fromto[3] - fromto[0]) * c + (fromto[4] - fromto[1]) * sn) / gap
+        else:
+            # touching (fromto is a point): the normal from the robot's centre to it
+            closing = (fromto[0] - s.xpos[0]) * c + (fromto[1] - s.xpos[1]) * sn
+        if closing <= 0.0:
+            continue
+        ahead = min(ahead, max(gap * units / closing, 0.0))
+    return ahead
+
+
+@njit(cache=True)
+def touching(s, heading):
+    """True when the body touches the room along `heading`: its move there is blocked
+    (room_ahead within TOUCH)."""
+    return room_ahead(s, heading, 2 * TOUCH) <= TOUCH
 
 
 # -- the family's step -------------------------------------------------------------------

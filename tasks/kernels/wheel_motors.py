@@ -11,7 +11,7 @@ from numba import njit
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl import records
 from tasks.kernels import two_wheel as family
-from tasks.kernels.body import BODY_FIELDS
+from tasks.kernels.body import BODY_FIELDS, base_pose
 from tasks.kernels.plan import PLAN_FIELDS, aim, phase
 from tasks.kernels.wheels import RAMP_FIELDS, WHEEL_FIELDS, move_angles, turn_angles
 
@@ -30,12 +30,13 @@ def turn(s, angle, leftover):
     """Turns by `angle` rad counter-clockwise over the turn phase (wheels.turn_angles)."""
     left, right = turn_angles(s, angle)
     aim(s, left, right, s.ramp_turn)
-    return phase(s, s.n_turn)
+    return phase(s, s.n_turn, 0.0, False)
 
 
 @njit(cache=True)
 def move(s, distance):
-    """Moves `distance` units forward over the move phase (wheels.move_angles)."""
+    """Moves `distance` units forward over the move phase (wheels.move_angles), ending
+    where the body touches the room."""
     left, right = move_angles(s, distance)
     aim(s, left, right, s.ramp_move)
-    return phase(s, s.n_move)
+    return phase(s, s.n_move, base_pose(s)[2], True)

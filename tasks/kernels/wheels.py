@@ -10,7 +10,7 @@ from numba import njit
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl import records
 from tasks.kernels import bindings, two_wheel as family
-from tasks.kernels.body import BODY_FIELDS, step_phase
+from tasks.kernels.body import BODY_FIELDS, base_pose
 
 
 #: Share of a phase over which the wheels' targets move; the rest is for settling.
@@ -37,20 +37,33 @@ WheelsRecord.constructor = njit(cache=True)(lambda *values: WheelsRecord(*values
 
 
 @njit(cache=True)
-def phase(s, left, right, n, ramp):
+def phase(s, left, right, n, ramp, heading, watch):
     """A phase of n substeps turning the wheels by (left, right) rad over the first
-    `ramp` substeps, then zero speeds for the rest. Returns (status, substeps)."""
+    `ramp` substeps, then zero speeds for the rest. With `watch` (a move), the phase ends
+    where the body touches the room along `heading` (family.touching, checked before each
+    substep), the wheels held there (`halt`). The tilt is checked at the ramp's end and the
+    phase's.
+    Returns (status, substeps)."""
     dt = s.timestep
     s.ctrl[s.left_actuator] = left / (ramp * dt)
     s.ctrl[s.right_actuator] = right / (ramp * dt)
-    status = step_phase(s, ramp)
-    if status != bindings.OK:
-        return status, n
+    for k in range(n):
+        if k == ramp:
+            if s.free != 0 and bindings.tilted(s.xmat, s.min_cos_tilt):
+                return bindings.TIPPED, n
+            s.ctrl[s.left_actuator] = 0.0
+            s.ctrl[s.right_actuator] = 0.0
+        if watch and family.touching(s, heading):
+            halt(s)
+            return bindings.OK, k
+        status = bindings.run(s.m, s.d, 1, s.bad_qacc, s.xmat, False, s.min_cos_tilt)
+        if status != bindings.OK:
+            return status, n
     s.ctrl[s.left_actuator] = 0.0
     s.ctrl[s.right_actuator] = 0.0
-    if n > ramp:
-        status = step_phase(s, n - ramp)
-    return status, n
+    if s.free != 0 and bindings.tilted(s.xmat, s.min_cos_tilt):
+        return bindings.TIPPED, n
+    return bindings.OK, n
 
 
 @njit(cache=True)
@@ -73,14 +86,16 @@ def move_angles(s, distance):
 def turn(s, angle, leftover):
     """Turns by `angle` rad counter-clockwise over the turn phase."""
     left, right = turn_angles(s, angle)
-    return phase(s, left, right, s.n_turn, s.ramp_turn)
+    return phase(s, left, right, s.n_turn, s.ramp_turn, 0.0, False)
 
 
 @njit(cache=True)
 def move(s, distance):
-    """Moves `distance` units forward over the move phase."""
+    """Moves `distance` units forward over the move phase, ending where the body touches
+    the room."""
     left, right = move_angles(s, distance)
-    return phase(s, left, right, s.n_move, s.ramp_move)
+    _, _, heading = base_pose(s)
+    return phase(s, left, right, s.n_move, s.ramp_move, heading, True)
 
 
 @njit(cache=True)

@@ -11,14 +11,13 @@ What it makes, and which test reads it:
 - tests/data/planar_traces_v<PROTOCOL_VERSION>.npz (tests/test_robots.py,
   test_planar_trajectories_unchanged_by_the_registry): the first STEPS steps of seeds
   SEEDS, every paper robot and condition, each the int16 trace of execution.execute, keyed
-  "<robot>__<condition>__seed_NNN". The committed file was cut from the full clean-clone
-  run behind RESULTS.md; a run's first steps are the same whatever its budget, which the
-  test checks.
+  "<robot>__<condition>__seed_NNN". A run's first steps are the same whatever its budget
+  (the full run behind RESULTS.md's first steps too), which the test checks.
 - tests/data/step_digests_v<PROTOCOL_VERSION>.json (tests/test_step_digests.py): for
   every registered robot and shipped mount (and a few readings), the sha256 of its steps
   under random actions (`step_digest`), by the hooks and by the compiled step. The
-  committed file was made at 55615e7, before the drives' Python twins went and the car
-  and the Ant were compiled.
+  committed file of version 8 was made by this script at protocol 8's body (version 7's at
+  55615e7, before the drives' Python twins went and the car and the Ant were compiled).
 - BEFORE, the readings digests in tests/test_ebrl_readings.py (sha256 of the actions
   rounded to 1e-9 and of the memory's final state, of the test's fixed input stream with
   protocol 3's readings), computed by that test file's own `stream` and `digests`. Being

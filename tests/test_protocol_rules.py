@@ -1,7 +1,8 @@
-"""Protocol 7's rules (issue 48), read from the run records the protocol writes, not from
-prose: every random action Section 3.4's Gaussian (mean 0, sd 0.5) for both robots, and one
-learner and one fallback: every agent reading the same for both robots but Table 1's memory
-size and eq 9's dead zone (the floating robot's own equation)."""
+"""The adopted protocol's rules (issue 48, kept by protocol 8, issue 56), read from the run
+records the protocol writes, not from prose: every random action Section 3.4's Gaussian
+(mean 0, sd 0.5) for both robots; one learner and one fallback: every agent reading the
+same for both robots but Table 1's memory size and eq 9's dead zone (the floating robot's
+own equation); and Section 3.3's blocked move, stated: no protocol refuses a move."""
 import json
 
 import pytest
@@ -31,7 +32,7 @@ def records(tmp_path_factory):
 def test_every_random_action_is_section_3_4s_gaussian(records):
     assert len(records) == 4
     for (robot, condition), p in records.items():
-        assert p["protocol_version"] == PROTOCOL_VERSION == 7
+        assert p["protocol_version"] == PROTOCOL_VERSION == 8
         agent = p["agent"]
         assert agent["random_demand"] == "gaussian", (robot, condition)
         assert agent["random_sd"] == 0.5 and agent["intrinsic_random_rate"] == 0.2
@@ -47,6 +48,19 @@ def test_one_learner_and_one_fallback_for_both_robots(records):
         assert {k: tw[k] for k in TABLE1} == TABLE1 == {k: fl[k] for k in TABLE1}
         assert tw["random_in_avoidance"] == fl["random_in_avoidance"]
         assert tw["policy_threshold"] == fl["policy_threshold"]
+
+
+def test_no_protocol_refuses_a_blocked_move(records):
+    """Section 3.3 states the blocked move (moved to the touch, the rest turned): every run
+    records blocked_move "stop", and every protocol gives it to every robot."""
+    from tasks.protocols import PROTOCOLS
+    for (robot, condition), p in records.items():
+        if robot == "two_wheel":
+            assert p["task"]["blocked_move"] == "stop", (robot, condition)
+    for protocol in PROTOCOLS.values():
+        for name, entry in ROBOTS.items():
+            readings = dict(protocol.readings_for(name, entry.drive))
+            assert readings.get("blocked_move", "stop") == "stop", (protocol.name, name)
 
 
 def test_every_registered_robot_has_the_one_learner():
