@@ -37,6 +37,7 @@ to the last bits or so at the paper's point: tests/test_evolve.py).
 """
 import dataclasses
 import json
+import sys
 import math
 import pathlib
 
@@ -250,7 +251,11 @@ _RANGES = {
 def _number(name, v):
     if isinstance(v, bool) or not isinstance(v, (int, float)):
         raise GenomeError(f"field {name}: not a number ({v!r})")
-    v = float(v)
+    try:
+        v = float(v)
+    except OverflowError:  # an integer past the largest float
+        raise GenomeError(f"field {name}: not a finite number (an integer of "
+                          f"{len(str(abs(v)))} digits)") from None
     if not math.isfinite(v):
         raise GenomeError(f"field {name}: not a finite number ({v!r})")
     return v
@@ -270,7 +275,7 @@ def from_dict(data):
     if not isinstance(data, dict):
         raise GenomeError("not a JSON object")
     behaviour = data.get("behaviour")
-    if behaviour not in CLASSES:
+    if not isinstance(behaviour, str) or behaviour not in CLASSES:
         raise GenomeError(f"field behaviour: {behaviour!r}; valid: {', '.join(FAMILIES)}")
     cls = CLASSES[behaviour]
     names = [f.name for f in dataclasses.fields(cls)]
@@ -328,11 +333,18 @@ def load(path):
     line, naming the file) otherwise."""
     path = shipped(path)
     try:
-        data = json.loads(path.read_text())
+        data = json.loads(path.read_bytes().decode("utf-8"))
     except OSError as e:
         raise GenomeError(f"behaviour file {path}: {e.strerror or e}") from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as e:
-        raise GenomeError(f"behaviour file {path}: not JSON ({type(e).__name__})") from None
+    except UnicodeDecodeError:
+        raise GenomeError(f"behaviour file {path}: not JSON (not UTF-8 text)") from None
+    except RecursionError:
+        raise GenomeError(f"behaviour file {path}: not JSON (nested too deeply)") from None
+    except ValueError as e:  # JSONDecodeError; an integer past Python's 4300 digits
+        said = str(e).splitlines()[0][:100] if str(e) else type(e).__name__
+        if "Exceeds the limit" in said:
+            said = f"an integer of more than {sys.get_int_max_str_digits()} digits"
+        raise GenomeError(f"behaviour file {path}: not JSON ({said})") from None
     try:
         return from_dict(data)
     except GenomeError as e:

@@ -43,7 +43,8 @@ _ONE_WORKER_MODULES = ("test_cli_inputs.py", "test_rendering.py")
 #: 29 s of setup on each).
 _SHARED_FIXTURES = {"test_experiments.py": ("clean_run", "kill_clean"),
                     "test_faults.py": ("clean",), "test_full_disk.py": ("reported",),
-                    "test_protocol_rules.py": ("records",), "test_provenance.py": ("made",)}
+                    "test_protocol_rules.py": ("records",), "test_provenance.py": ("made",),
+                    "test_pages.py": ("made",), "test_nothing_lost.py": ("reported_universe",)}
 
 
 def pytest_collection_modifyitems(config, items):

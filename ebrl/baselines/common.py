@@ -81,6 +81,12 @@ def discrete_actions(action_dim, levels=5):
     return np.array(rows)
 
 
+def action_count(action_dim, levels=5):
+    """How many discrete actions discrete_actions gives (levels for action_dim 1, 3^d
+    otherwise), without making them."""
+    return int(levels) if action_dim == 1 else 3 ** int(action_dim)
+
+
 def nearest_action(actions, action):
     """Index of the discrete action nearest (Euclidean) to `action`; the first on ties."""
     diff = actions - np.asarray(action, dtype=np.float64).reshape(1, -1)

@@ -8,7 +8,7 @@ from numba import njit
 
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl.baselines.common import _Base, _check_finite, _check_int, _check_shared, \
-    _Fallback, _is_number
+    _Fallback, _is_number, action_count
 
 
 @dataclasses.dataclass(frozen=True)
@@ -30,6 +30,19 @@ class MFECConfig(_Fallback):
                              f"got {v!r}")
         _check_finite(self, "value_threshold")
         _check_shared(self)
+
+
+def memory_bytes(config, obs_dim, action_dim, steps):
+    """About the most memory (bytes) an MFEC of config holds over a run of `steps` steps:
+    per discrete action memory_size slots of an embedding (obs_dim floats), a return and
+    a clock (8 bytes each), the scratch of a k-NN search (memory_size floats) and its k
+    best (neighbours, 16 bytes each), and a trial's record (doubled as it grows, at most
+    the run's steps). For the sizes a user sets (memory_size, neighbours, action_levels),
+    checked before any run."""
+    a = action_count(action_dim, config.action_levels)
+    m, n, k = int(config.memory_size), int(obs_dim), int(config.neighbours)
+    trial = 2 * max(64, int(steps)) * (n + 2)
+    return 8 * (a * m * (n + 2) + m + 2 * k + a * (action_dim + 4) + trial)
 
 
 @njit(cache=True)

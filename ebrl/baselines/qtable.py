@@ -6,7 +6,7 @@ import dataclasses
 import numpy as np
 
 from ebrl.baselines.common import _Base, _check_finite, _check_positive, _check_range, \
-    _check_shared, _Fallback
+    _check_shared, _Fallback, action_count
 
 
 @dataclasses.dataclass(frozen=True)
@@ -34,6 +34,17 @@ class QTableConfig(_Fallback):
                              f"({self.near_edge})")
         _check_positive(self, "velocity_edge")
         _check_shared(self)
+
+
+def memory_bytes(config, obs_dim, action_dim, steps):
+    """About the most memory (bytes) a QTable of config holds over a run of `steps`
+    steps: a row of Q values (8 bytes an action, and a dict entry) for each state it
+    meets (at most 3^obs_dim, at most one a step), the discrete actions, the default row
+    and each act's temporaries (its probabilities, exponentials and sums), a row each.
+    For the sizes a user sets (action_levels), checked before any run."""
+    a = action_count(action_dim, config.action_levels)
+    rows = min(3 ** min(int(obs_dim), 40), int(steps) + 1)
+    return 8 * a * (rows + action_dim + 8) + 200 * rows
 
 
 def boltzmann(q, temperature):

@@ -20,11 +20,11 @@ from ebrl.benchmark import reference_pass
 from experiments.running import execution
 
 
-def measure(robot, steps, blocks=5, room=None):
+def measure(robot, steps, blocks=5, room=None, drive=None):
     """Medians over `blocks` blocks of `steps` timed steps each (this machine's timings
     vary by about 10% from one moment to the next; the median of blocks much less)."""
     import tasks
-    spec = execution.RunSpec(robot, "avoidance", 0, steps, room=room)
+    spec = execution.RunSpec(robot, "avoidance", 0, steps, drive=drive, room=room)
     env = tasks.load(spec.entry, seed=0, room=spec.room)
     agent = execution.make_agent(spec, env)
     config = spec.agent_config()
@@ -70,7 +70,7 @@ def measure(robot, steps, blocks=5, room=None):
     env.close()
     fused_times = []
     spec = execution.RunSpec(robot, "avoidance", 0, config.memory_size + 200 + blocks * steps,
-                            room=room)
+                            drive=drive, room=room)
     env = tasks.load(spec.entry, seed=0, room=spec.room)
     trials = execution.Trials(env, execution.make_agent(spec, env), keys, spec.steps)
     if trials.fused:
@@ -88,11 +88,12 @@ def measure(robot, steps, blocks=5, room=None):
             "whole_loop": whole, "fused_loop": fused_loop, "reference_pass": ref}
 
 
-def main(steps=2000, blocks=5, robots=None, room=None):
+def main(steps=2000, blocks=5, robots=None, room=None, drive=None):
     from tasks.kernels.bindings import stage_timers_off
     from tasks.robots import ROBOTS
     with stage_timers_off():  # as `ebrl run` steps (execution.execute), raw physics too
-        rows = [measure(robot, steps, blocks, room) for robot in (robots or tuple(ROBOTS))]
+        rows = [measure(robot, steps, blocks, room, drive)
+                for robot in (robots or tuple(ROBOTS))]
     print(f"microseconds per agent step, memory full: medians of {blocks} blocks of {steps} steps"
           + (f", room {room}" if room is not None else ""))
     head = ("robot", "memory", "substeps", "raw physics", "env.step", "tasks", "env/raw",

@@ -109,7 +109,90 @@ def number(kind, name, text):
     return value
 
 
-def agent_configs(robots, overrides, drive=None, agent="ebrl"):
+def available_memory():
+    """Bytes of memory this machine has available now (/proc/meminfo's MemAvailable, else
+    the free pages), None where neither can be read."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def _bytes(n):
+    for unit, size in (("PB", 2**50), ("TB", 2**40), ("GB", 2**30), ("MB", 2**20)):
+        if n >= size:
+            return f"{n / size:,.1f} {unit}"
+    return f"{n / 2**10:,.1f} kB"
+
+
+#: The learners whose memory grows with sizes a user sets (--set): (module, function of
+#: (config, obs_dim, action_dim, steps) giving bytes, the sizes, each with its least).
+_SIZED = {"qtable": ("ebrl.baselines.qtable", {"action_levels": 2}),
+          "mfec": ("ebrl.baselines.mfec", {"memory_size": 1, "neighbours": 1,
+                                           "action_levels": 2})}
+
+
+def _largest(estimate, config, name, low, given, available):
+    """The largest value of the size `name` from low to given whose estimate fits in
+    available bytes (None when not even low does), the other fields as config's."""
+    import dataclasses
+    import types
+    fields = dataclasses.asdict(config)
+
+    def fits(v):
+        return estimate(types.SimpleNamespace(**{**fields, name: v})) <= available
+    if not fits(low):
+        return None
+    lo, hi = low, given
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        lo, hi = (mid, hi) if fits(mid) else (lo, mid - 1)
+    return lo
+
+
+def memory_fits(agent, config, dims, steps, overrides, robot, available=None):
+    """ValueError (one line naming the option and the largest value that fits) when a
+    learner with the sizes set in overrides would hold more than the memory available
+    (available_memory(), or given); dims is (obs_dim, action_dim) of the robot's task."""
+    if agent not in _SIZED:
+        return
+    module, sizes = _SIZED[agent]
+    given = {name: overrides[name] for name in sizes if name in overrides}
+    if not given:
+        return
+    available = available_memory() if available is None else available
+    if available is None:
+        return
+    import importlib
+    bytes_of = importlib.import_module(module).memory_bytes
+
+    def estimate(c):
+        return bytes_of(c, *dims, steps)
+    need = estimate(config)
+    if need <= available:
+        return
+    options = [(name, _largest(estimate, config, name, sizes[name], value, available))
+               for name, value in given.items()]
+    name, largest = max(options, key=lambda o: -1 if o[1] is None else given[o[0]] // max(o[1], 1))
+    said = (f"the largest {name} that fits is {largest:,}" if largest is not None else
+            f"it does not fit even at {name}={sizes[name]}: lower "
+            + ", ".join(n for n in given if n != name))
+    value = given[name]
+    shown = f"{value:,}" if value < 10**18 else f"{str(value)[:3]}... ({len(str(value))} digits)"
+    held = "over 1,000 PB" if need >= 1000 * 2**50 else f"about {_bytes(need)}"
+    raise ValueError(f"--set {name}={shown}: the {agent} agent of {robot} would hold "
+                     f"{held}, more than the {_bytes(available)} of memory "
+                     f"available; {said}")
+
+
+def agent_configs(robots, overrides, drive=None, agent="ebrl", steps=None):
     """Builds each robot's agent config and task config with the overrides once, here,
     as a run would (execution.RunSpec), so that a name the chosen learner and the task do
     not have, or a value their configs refuse, stops the command before any run."""
@@ -142,11 +225,27 @@ def agent_configs(robots, overrides, drive=None, agent="ebrl"):
             except ValueError as e:
                 raise ValueError(f"task parameters {shown}: {robot}: {e}") from None
         try:
-            spec.agent_config()
+            config = spec.agent_config()
         except (TypeError, ValueError) as e:
             shown = " ".join(f"{k}={v}" for k, v in sorted(overrides.items())
                              if k not in task_fields)
             raise ValueError(f"agent parameters {shown} for {robot}: {e}") from None
+        if agent in _SIZED and any(name in overrides for name in _SIZED[agent][1]):
+            memory_fits(agent, config, _dims(spec), steps or spec.entry.budget, overrides,
+                        robot)
+
+
+def _dims(spec):
+    """(obs_dim, action_dim) of a run's agent: its modalities' sizes, its drive's action
+    (the robot's task, loaded once here)."""
+    import tasks
+    env = tasks.load(spec.entry, seed=0)
+    try:
+        obs = env.observation_spec()
+        return (sum(obs[key].shape[0] for key, _ in spec.entry.modalities),
+                env.action_spec().shape[0])
+    finally:
+        env.close()
 
 
 def _can_create_in(folder):

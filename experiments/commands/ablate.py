@@ -64,7 +64,8 @@ def _check(args):
     validate.output_folder(args.out, "--out")
     if args.baseline is not None:
         validate.results_folder(args.baseline, "--baseline")
-    arguments.check_results(args)
+    from experiments.studies import ablation
+    arguments.check_results(args, (ablation.ABLATION_BEGIN, ablation.ABLATION_END))
     return readings, combos
 
 

@@ -164,9 +164,15 @@ def add_results(parser, what, figures=True):
                             help="where the page's figures go (default: %(default)s)")
 
 
-def check_results(args):
-    """add_results' options writable, before any work starts (ValueError otherwise)."""
+def check_results(args, *blocks):
+    """add_results' options writable, and the page's blocks (each a (begin, end) pair of
+    markers) well formed where it has them, before any work starts (ValueError
+    otherwise: experiments.outputs.page.PageError, one line naming the page and the
+    line)."""
     if args.results is not None:
         validate.output_file(args.results, "--results")
         if hasattr(args, "figures"):
             validate.output_folder(args.figures, "--figures")
+        from experiments.outputs import page
+        for begin, end in blocks:
+            page.check(args.results, begin, end, "--results")

@@ -1,13 +1,13 @@
-"""`ebrl bench`: microseconds per agent step, by part (experiments.checks.bench)."""
+"""`ebrl bench`: microseconds per agent step, by part (experiments.checks.bench). It takes
+the robots `ebrl run` takes: registered names, a mount, or a robot .xml file with --drive."""
 from experiments.checks import validate
 from experiments.commands import arguments
-from experiments.commands.common import check_room, fail
+from experiments.commands.common import check_robots, fail, selected_robots
 
 
 def add_parser(subparsers):
     p = subparsers.add_parser("bench", help="microseconds per agent step, by part")
-    p.add_argument("--robot", type=arguments.robot_list, default=arguments.robot_list("all"),
-                   help="default: every registered robot")
+    arguments.add_robots(p, "all")
     p.add_argument("--steps", type=arguments.up_to(validate.MAX_BENCH_STEPS), default=2000,
                    help="timed steps per block")
     p.add_argument("--blocks", type=arguments.up_to(validate.MAX_BENCH_BLOCKS), default=5,
@@ -18,9 +18,9 @@ def add_parser(subparsers):
 
 def run(args):
     try:
-        check_room(args.robot, args.room)
+        check_robots(args)  # a robot file without --drive, or a bad one: one line
     except ValueError as e:
         return fail(str(e))
     from experiments.checks import bench
-    bench.main(args.steps, args.blocks, args.robot, args.room)
+    bench.main(args.steps, args.blocks, selected_robots(args), args.room, args.drive)
     return 0

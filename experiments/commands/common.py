@@ -64,7 +64,7 @@ def check_agent(args, overrides):
     if twice is not None:
         raise ValueError(f"--set {twice} is given more than once")
     validate.agent_configs(selected_robots(args), overrides, args.drive,
-                           getattr(args, "agent", "ebrl"))
+                           getattr(args, "agent", "ebrl"), getattr(args, "steps", None))
     if overrides:  # a task field (radius) against the room's corridors
         check_room(selected_robots(args), getattr(args, "room", None), args.drive, overrides)
 
@@ -90,7 +90,8 @@ def _storage_url(args):
     if args.storage is None:
         pass  # OUT/study.db: --out is checked by the caller
     elif url.startswith("sqlite:///"):
-        validate.output_file(pathlib.Path(url[len("sqlite:///"):]), "--storage")
+        path = validate.output_file(pathlib.Path(url[len("sqlite:///"):]), "--storage")
+        _sqlite_or_new(path, args.storage)
     else:
         import sqlalchemy.engine
         try:
@@ -98,6 +99,55 @@ def _storage_url(args):
         except Exception as e:  # sqlalchemy's ArgumentError: not a URL
             raise ValueError(f"bad --storage {args.storage!r}: {e}") from None
     return url
+
+
+#: The first bytes of every SQLite database file (an empty file is a new database too).
+SQLITE_HEADER = b"SQLite format 3\x00"
+
+
+def _sqlite_or_new(path, given):
+    """An SQLite file --storage names: a database, an empty file or none; ValueError (one
+    line) for a file that is something else, which is never opened (nor a lock made
+    beside it)."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(len(SQLITE_HEADER))
+    except FileNotFoundError:
+        return
+    except OSError as e:
+        raise ValueError(f"--storage {given}: cannot be read ({e.strerror or e})") from None
+    if head and head != SQLITE_HEADER:
+        raise ValueError(f"--storage {given}: not an SQLite database (it does not start "
+                         "with SQLite's header); the file is left as it is: give a new file, "
+                         "a study's database or a URL")
+
+
+def _storage_files(url):
+    """The files opening an SQLite storage may make: the database and its lock beside it."""
+    if not str(url).startswith("sqlite:///"):
+        return []
+    path = pathlib.Path(str(url)[len("sqlite:///"):].split("?")[0])
+    return [path, path.with_name(path.name + ".lock")]
+
+
+def open_study(args, url, load):
+    """The study load() opens, with --out made first: (study, None); or, when the storage
+    cannot be opened, (None, the exit status of its one line) with what this call made
+    (--out, a new database file and its lock) removed again: a refusal writes nothing."""
+    from experiments.running import results
+    from experiments.studies import study
+    made = [p for p in (args.out, *_storage_files(url)) if not p.exists()]
+    args.out.mkdir(parents=True, exist_ok=True)
+    try:
+        return load(), None
+    except Exception as e:  # a storage that cannot be opened: one line
+        for path in reversed(made):
+            try:
+                path.rmdir() if path.is_dir() else path.unlink(missing_ok=True)
+            except OSError:  # a folder something else wrote into: kept
+                pass
+        return None, fail(study.hide(f"cannot open the study storage {url}: "
+                                     f"{results.error_line(e)}", url))
 
 
 def study_storage(args):

@@ -4,7 +4,7 @@ import pathlib
 
 from experiments.checks import validate
 from experiments.commands import arguments
-from experiments.commands.common import check_robots, fail, finish, study_storage
+from experiments.commands.common import check_robots, fail, finish, open_study, study_storage
 
 
 def add_parser(subparsers):
@@ -89,12 +89,10 @@ def run(args):
     from experiments.studies import evolve, study
     label = execution.RunSpec(args.robot, "avoidance", 0, 1, drive=args.drive, room=args.room).label
     name = args.study or evolve.study_name(label, not args.no_learning)
-    args.out.mkdir(parents=True, exist_ok=True)
-    try:
-        s = study.load(name, url, args.out, sampler=problem.sampler(0), first=problem.x0())
-    except Exception as e:  # a storage that cannot be opened: one line
-        return fail(study.hide(f"cannot open the study storage {url}: {results.error_line(e)}",
-                               url))
+    s, status = open_study(args, url, lambda: study.load(
+        name, url, args.out, sampler=problem.sampler(0), first=problem.x0()))
+    if s is None:
+        return status
     try:
         evolve.check_settings(s, problem)
     except ValueError as e:

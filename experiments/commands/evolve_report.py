@@ -29,7 +29,8 @@ def _check(args):
             raise ValueError(f"{what}: no folder at {folder}")
     validate.output_file(args.out, "--out")
     validate.output_folder(args.figures, "--figures")
-    arguments.check_results(args)
+    from experiments.studies import evolved
+    arguments.check_results(args, (evolved.BEGIN, evolved.END))
 
 
 def run(args):

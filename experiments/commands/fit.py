@@ -5,7 +5,7 @@ import pathlib
 
 from experiments.checks import validate
 from experiments.commands import arguments
-from experiments.commands.common import check_room, fail, finish, study_storage
+from experiments.commands.common import check_room, fail, finish, open_study, study_storage
 
 
 def add_parser(subparsers):
@@ -84,7 +84,8 @@ def _check(args):
                          "--seeds or --promote-seeds)")
     if args.trial is not None and args.validate is None:
         raise ValueError("--trial chooses the trial --validate runs; give --validate too")
-    arguments.check_results(args)
+    from experiments.studies import fit
+    arguments.check_results(args, (fit.FIT_BEGIN, fit.FIT_END))
     return names, study_storage(args)
 
 
@@ -140,14 +141,11 @@ def run(args):
     rungs = (tuple(args.seeds),) if args.seeds == args.promote_seeds else \
         (tuple(args.seeds), tuple(args.promote_seeds))
     problem = fit.Problem(names=names, rungs=rungs, steps=args.steps, room=args.room)
-    args.out.mkdir(parents=True, exist_ok=True)
-    try:
-        s = study.load(args.study or _in_room(fit.STUDY_NAME, args.room), url, args.out,
-                       args.sampler_seed,
-                       first={n: fit.default(n) for n in names})  # the defaults: trial 0
-    except Exception as e:  # a storage that cannot be opened: one line
-        return fail(study.hide(f"cannot open the study storage {url}: {results.error_line(e)}",
-                               url))
+    s, status = open_study(args, url, lambda: study.load(
+        args.study or _in_room(fit.STUDY_NAME, args.room), url, args.out, args.sampler_seed,
+        first={n: fit.default(n) for n in names}))  # the defaults: trial 0
+    if s is None:
+        return status
     try:
         outcome, path, failed = _search(args, s, problem, names)
     except (results.ResultsError, _NoTrial) as e:
@@ -161,13 +159,11 @@ def _first_trial(args, names, rungs, url):
     from experiments.running import results
     from experiments.studies import first_trials, study
     problem = first_trials.Problem(args.robot, names, rungs, args.steps, room=args.room)
-    args.out.mkdir(parents=True, exist_ok=True)
     name = args.study or _in_room(f"first_trial_{args.robot}", args.room)
-    try:
-        s = study.load(name, url, args.out, args.sampler_seed, first=problem.defaults())
-    except Exception as e:  # a storage that cannot be opened: one line
-        return fail(study.hide(f"cannot open the study storage {url}: {results.error_line(e)}",
-                               url))
+    s, status = open_study(args, url, lambda: study.load(
+        name, url, args.out, args.sampler_seed, first=problem.defaults()))
+    if s is None:
+        return status
     try:
         outcome, path, failed = first_trials.fit(
             problem, s, args.out, args.trials, batch=args.batch, workers=args.workers,

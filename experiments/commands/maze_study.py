@@ -50,7 +50,7 @@ def run(args):
     from models import rooms
     try:
         validate.output_folder(args.out, "--out")
-        arguments.check_results(args)
+        arguments.check_results(args, (mazes.BEGIN, mazes.END))
         specs = mazes.plan(args.sizes, args.mazes, args.seeds, args.steps_per_cell)
     except (ValueError, rooms.MapError) as e:
         return fail(str(e))

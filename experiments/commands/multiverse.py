@@ -6,7 +6,6 @@ Each finished run leaves its record in the records folder (--records; experiment
 multiverse_records), which is what the analysis reads and what a resume skips: a fresh
 clone given the committed records (docs/data/multiverse) makes only the runs they lack,
 or none (--report-only). The records are read and checked before any work."""
-import json
 import pathlib
 
 from experiments.checks import validate
@@ -77,16 +76,19 @@ def _check(args):
 
 def _bench(out, measure):
     """OUT/bench.json: ebrl bench's measure per paper robot, made now (measure) or before."""
-    from experiments.running import results
+    import functools
+
+    from experiments.running import results, schema
     from tasks.robots import PAPER_ROBOTS
     path = out / "bench.json"
+    check = functools.partial(schema.check_bench, robots=PAPER_ROBOTS)
     if measure:
         from experiments.checks import bench
         from tasks.kernels.bindings import stage_timers_off
         with stage_timers_off():
             rows = {r: bench.measure(r, 1000, 3) for r in PAPER_ROBOTS}
         results.atomic_write(path, results.dumps(rows))
-    return json.loads(path.read_text()) if path.exists() else None
+    return results.read_bookkeeping(path, check)
 
 
 def _records(args, chosen, universes):
@@ -185,17 +187,19 @@ def _report(args, chosen, design, universes, folder, specs, store, made):
 
 def run(args):
     from experiments.running import results
+    from experiments.studies import multiverse
     try:
         chosen, (design, universes) = _check(args)
         folder, specs, store, made = _records(args, chosen, universes)
-    except ValueError as e:
-        return fail(str(e))
-    except results.ResultsError as e:
+        if not args.report_only:  # the run folders the records lack, before any work: a
+            multiverse.check_on_disk(args.out, [s for s in specs if s not in made])  # refused
+    except (ValueError, results.ResultsError) as e:  # resume touches nothing
         return fail(str(e))
     if args.report_only and not store.files:
         return fail(f"--report-only: no records at {folder}")
     args.out.mkdir(exist_ok=True)
     try:
+        _bench(args.out, False)  # a damaged bench.json is set aside now, named, made again
         if not args.report_only:
             _make(args, chosen, specs, made, folder)
             store = type(store)(folder, store.ident)  # this session's records and end too

@@ -30,17 +30,33 @@ def add_parser(subparsers):
 def _check(args):
     validate.results_folder(args.dir, writable=True)
     validate.output_folder(args.dir / "figures", "the figures folder")
-    arguments.check_results(args)
+    from experiments.outputs import headline
+    from experiments.outputs import report as outputs
     if args.section is not None and (args.results is None or args.literal is not None):
         raise ValueError("--section needs --results, and is not for the headline (--literal)")
-    if args.section is not None and not args.section.strip():
-        raise ValueError("--section: give the block a name")
+    if args.section is not None:
+        outputs.check_section(args.section)
+    arguments.check_results(args, outputs.markers(args.section))
+    if args.section is not None:
+        outputs.check_section_clash(args.results, args.section)
     if args.literal is not None:
         if args.results is None:
             raise ValueError("--literal needs --results (the page its headline goes in)")
-        if not (args.literal / "summary.json").is_file():
+        summary = args.literal / "summary.json"
+        if not summary.is_file():
             raise ValueError(f"--literal {args.literal}: no summary.json there (make it with "
                              f"`ebrl report {args.literal}`)")
+        headline.check(args.results)
+        from experiments.running import results
+        try:
+            literal = results.read_summary(summary)
+            headline.table(literal, literal)  # the headline can be made from it
+        except results.DamagedFile as e:
+            raise ValueError(f"--literal {args.literal}: {e}") from None
+        except (KeyError, IndexError, TypeError, ValueError, AttributeError) as e:
+            raise ValueError(f"--literal {args.literal}: {summary} cannot give the headline "
+                             f"({results.error_line(e, 160)}); remake it with `ebrl report "
+                             f"{args.literal}`") from None
 
 
 def run(args):
@@ -72,12 +88,11 @@ def _headline(args):
     """The headline from this folder's and the literal folder's summary.json, written into
     the page and its README (experiments.outputs.headline); the literal summary kept
     beside the page."""
-    import json
-
     from experiments.outputs import headline
     from experiments.running import results
-    literal = (args.literal / "summary.json").read_bytes()
+    path = args.literal / "summary.json"
+    literal = path.read_bytes()
+    parsed = results.read_summary(path)
+    current = results.read_summary(args.dir / "summary.json")
     results.atomic_write(args.results.parent / headline.LITERAL_SUMMARY, literal)
-    current = json.loads((args.dir / "summary.json").read_text())
-    return headline.publish(args.results, current, json.loads(literal))
-
+    return headline.publish(args.results, current, parsed)

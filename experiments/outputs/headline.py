@@ -94,14 +94,27 @@ def block(current, literal):
     return [BEGIN, "", *table(current, literal), "", END]
 
 
+def pages(results_md):
+    """The pages the headline goes in: results_md and the README.md beside it."""
+    return pathlib.Path(results_md), pathlib.Path(results_md).parent / "README.md"
+
+
+def check(results_md):
+    """Before any work: each page's headline block, where it has one, well formed
+    (experiments.outputs.page.PageError, one line naming the page and the line, if not)."""
+    from experiments.outputs import page
+    for path in pages(results_md):
+        page.check(path, BEGIN, END)
+
+
 def publish(results_md, current, literal):
     """Writes the headline into results_md and the README.md beside it (where each has the
     markers; a page without them is left as it is). The pages written."""
-    from experiments.outputs import report
+    from experiments.outputs import page
     written = []
     lines = block(current, literal)
-    for page in (pathlib.Path(results_md), pathlib.Path(results_md).parent / "README.md"):
-        if page.exists() and BEGIN in page.read_text() and END in page.read_text():
-            report.replace_block(page, BEGIN, END, lines)
-            written.append(page)
+    for path in pages(results_md):
+        if page.has_block(path, BEGIN, END):
+            page.replace(path, BEGIN, END, lines)
+            written.append(path)
     return written

@@ -1,6 +1,5 @@
 """`ebrl report DIR`: summary.json, REPORT.md and the figures, from the run folders."""
 import functools
-import json
 import os
 import pathlib
 import re
@@ -8,7 +7,7 @@ import re
 import numpy as np
 
 from experiments import paper
-from experiments.outputs import verdict_tables, verdicts
+from experiments.outputs import page, verdict_tables, verdicts
 from experiments.running import lock, provenance, results
 from tasks.robots import DRIVES
 
@@ -293,13 +292,50 @@ def section_slug(section):
     return re.sub(r"[^a-z0-9]+", "-", section.lower()).strip("-")
 
 
+#: A section's name (--section): it stands in the page's markers (HTML comments) and its
+#: file's name, so letters, digits, spaces and a little punctuation, never "--".
+SECTION_NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9 _.,()+&'/-]{0,59}")
+#: Files beside the page that are not a section's: the headline's literal summary.
+_NOT_SECTIONS = {"literal"}
+_SECTION_BEGIN = re.compile(r"<!-- ebrl report: (.+?): generated, do not edit -->")
+
+
+def check_section(section):
+    """--section NAME as a block's name: ValueError (one line) for a name that cannot
+    stand in a marker or a file name, or whose file is another's."""
+    if not section.strip():
+        raise ValueError("--section: give the block a name")
+    if not SECTION_NAME.fullmatch(section) or "--" in section or section != section.strip():
+        raise ValueError(f"--section {section!r}: not a block's name (it goes in the page's "
+                         "HTML comments and summary-NAME.json): at most 60 letters, digits, "
+                         "spaces and - _ . , ( ) + & ' /, a letter or digit first, no '--'")
+    slug = section_slug(section)
+    if slug in _NOT_SECTIONS:
+        raise ValueError(f"--section {section!r}: its file summary-{slug}.json is the "
+                         "headline's (ebrl report --literal); give another name")
+    return slug
+
+
+def check_section_clash(results_md, section):
+    """ValueError when the page holds a section of another name whose file name is this
+    one's ("Run A" and "run a" both write summary-run-a.json)."""
+    text = page.read(results_md) or ""
+    slug = section_slug(section)
+    other = next((name for name in dict.fromkeys(_SECTION_BEGIN.findall(text))
+                  if name != section and section_slug(name) == slug), None)
+    if other is not None:
+        raise ValueError(f"--section {section!r}: {results_md} has the section {other!r}, "
+                         f"whose file summary-{slug}.json this name's would overwrite; give "
+                         f"that name exactly, or a name that differs in its letters or digits")
+
+
 def publish(root, results_md, figures_dir, section=None):
     """Regenerates the tables of results_md (between its markers, keeping the rest),
     copies the figures into figures_dir and summary.json beside results_md; with a
     section, that section's block (the tests, the claims and the learning curves: the
     rest is in its REPORT.md) and summary-<section>.json, the main block untouched."""
     root, results_md, figures_dir = map(pathlib.Path, (root, results_md, figures_dir))
-    summary = json.loads((root / "summary.json").read_text())
+    summary = results.read_summary(root / "summary.json")
     figures_dir.mkdir(parents=True, exist_ok=True)
     rel = os.path.relpath(figures_dir, results_md.parent)
     begin, end = markers(section)
@@ -334,15 +370,11 @@ def copy(src, dst):
 
 
 def replace_block(path, begin, end, block):
-    """Writes the lines `block` (which start with begin and end with end) over the text
-    between the markers in path, keeping the rest; appends them if a marker is missing."""
-    path = pathlib.Path(path)
-    text = path.read_text() if path.exists() else f"# Results\n\n{begin}\n{end}\n"
-    if begin not in text or end not in text:
-        text = text.rstrip() + f"\n\n{begin}\n{end}\n"
-    head, rest = text.split(begin, 1)
-    tail = rest.split(end, 1)[1]
-    results.atomic_write(path, head + "\n".join(block) + tail)
+    """Writes the lines `block` (which start with begin and end with end) over the block
+    between the markers in path, keeping the rest byte for byte; appends them to a page
+    without the block (experiments.outputs.page: a broken block is PageError, one line,
+    nothing written)."""
+    return page.replace(path, begin, end, block)
 
 
 def optimal_table(rows):

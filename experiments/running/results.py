@@ -124,7 +124,7 @@ FAILURE_KINDS = (
     ("robot", lambda e: e.startswith(("MountError:", "ContractError:")) or "XML Error" in e,
      "the robot file is bad (the error says where): fix it, then RERUN"),
     ("memory", lambda e: e.split(":")[0].endswith("MemoryError"),  # numpy's _ArrayMemoryError
-     "out of memory: RERUN with fewer --workers"),
+     "out of memory: RERUN with fewer --workers, or with smaller --set sizes"),
     ("left the room", lambda e: e.startswith("PhysicsError: the robot left the room"),
      "the robot went through a wall and off the room's floor, which a rerun repeats (same "
      "seed, same computation): its contacts with the walls are too soft or its steps too "
@@ -190,6 +190,47 @@ def read_run_json(path):
         return schema.read_record(path)
     except schema.Damaged as e:
         raise DamagedRun(path.parent, str(e)) from None
+
+
+class DamagedFile(ResultsError):
+    """A file the tool wrote and reads back (summary.json, a multiverse folder's
+    bench.json, a fit's validation.json) that cannot be read or is not of its kind's
+    shape: the message names the file and what is wrong (schema.read_json)."""
+
+
+def read_file(path, check):
+    """The JSON file at path checked by check (schema.check_summary, check_bench,
+    check_validation): the one reader of the files the tool reads back; DamagedFile naming
+    the file when it cannot be read or is not of its shape."""
+    try:
+        return schema.read_json(path, check)
+    except schema.Damaged as e:
+        raise DamagedFile(str(e)) from None
+
+
+def read_bookkeeping(path, check):
+    """A study folder's bookkeeping file (bench.json, validation.json) read through
+    read_file: its value, or None when there is none; a damaged one is moved aside to
+    PATH.damaged-<time> (schema.move_aside, never deleted) with one warning line naming
+    it, and the caller makes it again."""
+    path = pathlib.Path(path)
+    if not path.exists():
+        return None
+    try:
+        return read_file(path, check)
+    except DamagedFile as e:
+        try:
+            aside = schema.move_aside(path)
+        except OSError as error:
+            raise write_error(path, error) from error
+        warn(f"{e}; moved aside to {aside.name} (kept), the command goes on as if it "
+             "were missing")
+        return None
+
+
+def read_summary(path):
+    """A summary.json (ebrl report's), checked (schema.check_summary); DamagedFile if not."""
+    return read_file(path, schema.check_summary)
 
 
 def read_run(folder, root=None):

@@ -282,3 +282,108 @@ def set_aside(folder):
     for path in files:
         os.replace(path, aside / path.name)
     return aside
+
+
+# -- the other files the tool writes and reads back ----------------------------------
+# Each kind's check takes the file's JSON value and raises Damaged saying what is wrong;
+# read_json names the file. A run folder's files are read above (read_record,
+# check_files); a behaviour genome by ebrl.behaviour.load.
+
+def _list_of_objects(d, key, where):
+    v = _typed(d, key, where, list, "a list", optional=False)
+    for i, item in enumerate(v):
+        if not isinstance(item, dict):
+            raise Damaged(f"{where}{key}[{i}] is {_name(item)}, not an object")
+    return v
+
+
+def check_summary(summary):
+    """summary.json (ebrl report's): the keys its readers (the page's tables, the
+    headline) take, of their types."""
+    if not isinstance(summary, dict):
+        raise Damaged(f"it holds {_name(summary)}, not a summary")
+    for i, g in enumerate(_list_of_objects(summary, "groups", "")):
+        where = f"groups[{i}]."
+        for key in ("robot", "condition"):
+            _typed(g, key, where, str, "a string", optional=False)
+        _integer(g, "seeds", where)
+        for key in ("first_trial_steps", "steps_per_trial", "goals"):
+            _typed(g, key, where, dict, "an object", optional=False)
+    prov = _typed(summary, "provenance", "", dict, "an object", optional=False)
+    _typed(prov, "protocol_versions", "provenance.", list, "a list", optional=False)
+    commits = _typed(prov, "commits", "provenance.", list, "a list", optional=False)
+    if not all(isinstance(c, str) for c in commits):
+        raise Damaged("provenance.commits holds a value that is not a string")
+    for i, g in enumerate(_list_of_objects(prov, "groups", "provenance.")):
+        _typed(g, "seeds", f"provenance.groups[{i}].", str, "a string", optional=False)
+    tests = _typed(summary, "tests", "", dict, "an object", optional=False)
+    for key in ("figures", "shrinks", "counts"):
+        for i, row in enumerate(_list_of_objects(tests, key, "tests.")):
+            for name in ("robot", "condition") if key != "counts" else ("claim",):
+                _typed(row, name, f"tests.{key}[{i}].", str, "a string", optional=False)
+    return summary
+
+
+def check_bench(rows, robots=()):
+    """A multiverse folder's bench.json: for each robot (given, and any it holds), ebrl
+    bench's measure, an object whose fused_loop is a number."""
+    if not isinstance(rows, dict):
+        raise Damaged(f"it holds {_name(rows)}, not an object of robots")
+    for robot in robots:
+        if robot not in rows:
+            raise Damaged(f"{robot} is missing")
+    for robot, row in rows.items():
+        if not isinstance(row, dict):
+            raise Damaged(f"{robot} is {_name(row)}, not an object")
+        v = _typed(row, "fused_loop", f"{robot}.", (int, float), "a number", optional=False)
+        if not (math.isnan(v) or 0 < v < math.inf):
+            raise Damaged(f"{robot}.fused_loop is {v}, not a positive number")
+    return rows
+
+
+def read_json(path, check):
+    """The JSON file at path, checked by check (one of the check_* above); Damaged naming
+    the file (its path) and what is wrong."""
+    path = pathlib.Path(path)
+    try:
+        value = _json(path)
+    except Damaged as e:
+        raise Damaged(f"{path}{str(e)[len(path.name):]}") from None  # "<path> is not JSON"
+    try:
+        return check(value)
+    except Damaged as e:
+        raise Damaged(f"{path}: {e}") from None
+
+
+def move_aside(path):
+    """Moves a damaged bookkeeping file to PATH.damaged-<UTC time> beside it (never
+    deleting it); returns the new path."""
+    path = pathlib.Path(path)
+    stamp = datetime.datetime.now(datetime.timezone.utc).strftime("%Y%m%dT%H%M%SZ")
+    aside, n = path.with_name(f"{path.name}.{DAMAGED_PREFIX}{stamp}"), 1
+    while aside.exists():
+        n += 1
+        aside = path.with_name(f"{path.name}.{DAMAGED_PREFIX}{stamp}-{n}")
+    os.replace(path, aside)
+    return aside
+
+
+def check_validation(row_keys):
+    """A study's validation file (ebrl fit --validate: validation.json, row_keys value,
+    groups and claims; --stage first-trial: validation_first_trial_<drive>.json, distance
+    and figures): its seeds, its settings and a best and a defaults row of those keys."""
+    def check(v):
+        if not isinstance(v, dict):
+            raise Damaged(f"it holds {_name(v)}, not a validation")
+        seeds = _typed(v, "seeds", "", list, "a list", optional=False)
+        if not seeds or not all(isinstance(s, int) and not isinstance(s, bool) for s in seeds):
+            raise Damaged("seeds is not a list of seeds")
+        _typed(v, "params", "", dict, "an object", optional=False)
+        rows = _typed(v, "rows", "", dict, "an object", optional=False)
+        for name in ("best", "defaults"):
+            row = _typed(rows, name, "rows.", dict, "an object", optional=False)
+            for key in row_keys:
+                if key not in row:
+                    raise Damaged(f"rows.{name}.{key} is missing")
+        return v
+    return check

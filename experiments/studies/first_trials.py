@@ -22,7 +22,7 @@ import pathlib
 import numpy as np
 
 from experiments import paper
-from experiments.running import results, runner
+from experiments.running import results, runner, schema
 from experiments.studies import study
 
 STAGE = "first-trial"
@@ -258,7 +258,6 @@ def text(params, robot):
 def write(s, out, problem):
     """FIT_first_trial_<drive>.md under out: the best trials, their figures beside the
     paper's, and the held-out validation when there is one. Returns its path."""
-    import json
 
     import optuna
     out = pathlib.Path(out)
@@ -281,8 +280,8 @@ def write(s, out, problem):
         lines += ["", f"Trial {best[0].number} on its {len(d['seeds'])} seeds:", ""]
         lines += figure_rows({"best": d["figures"]}, problem.drive)
     vpath = out / f"validation_first_trial_{problem.drive}.json"
-    if vpath.exists():
-        v = json.loads(vpath.read_text())
+    v = results.read_bookkeeping(vpath, schema.check_validation(("distance", "figures")))
+    if v is not None:  # a damaged one is set aside, named, and made by the next --validate
         rows = v["rows"]
         lines += ["", f"Held-out validation on seeds {v['seeds'][0]}-{v['seeds'][-1]} "
                   f"({len(v['seeds'])} seeds no trial used): {text(v['params'], problem.robot)} "

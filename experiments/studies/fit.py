@@ -24,13 +24,12 @@ readings to the paper's first-trial distributions on first-trial runs, on the sa
 study runner: experiments/studies/first_trials.py.
 """
 import dataclasses
-import json
 import math
 import pathlib
 
 from experiments import paper
 from experiments.outputs import report
-from experiments.running import results
+from experiments.running import results, schema
 from experiments.studies import study
 from tasks import readings as registry
 
@@ -332,8 +331,8 @@ def tables(s, out, names):
                   "no learner acts before its first reward) shows equal importances; a "
                   "reading's importance for a figure it cannot move is shown as '-'."]
     vpath = pathlib.Path(out) / "validation.json"
-    if vpath.exists():
-        v = json.loads(vpath.read_text())
+    v = results.read_bookkeeping(vpath, schema.check_validation(("value", "groups", "claims")))
+    if v is not None:  # a damaged one is set aside, named, and made by the next --validate
         rows = v["rows"]
         seeds = v["seeds"]
         budget = "the paper's budgets" if v.get("steps") is None else f"{v['steps']:,} steps a run"

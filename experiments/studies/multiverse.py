@@ -360,6 +360,13 @@ def plan(all_universes, seeds, steps=None):
     return sorted(unique, key=lambda s: -s.steps)
 
 
+def check_on_disk(out, specs):
+    """ResultsError when a run folder under OUT/runs holds a run of specs made with other
+    parameters (another --steps, say), found before any work and without writing anything
+    (damaged folders are left for run to set aside)."""
+    runner.pending(functools.partial(root_of, out), specs, mend=False)
+
+
 def run(out, specs, workers=None, backend="local", progress=True, written=None):
     """Runs the specs whose folder under OUT/runs holds no complete run (ResultsError
     first if a folder holds other runs); written(spec, run, result) after each run is

@@ -23,6 +23,25 @@ def read(path: pathlib.Path) -> dict:
         return tomllib.loads(path.read_text())
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
         raise MountError(f"{path}: not a TOML file: {e}") from None
+    except ValueError as e:  # an integer past Python's 4300 digits
+        said = str(e).split(":")[0] if "Exceeds the limit" in str(e) else str(e)
+        raise MountError(f"{path}: not a TOML file: {said} (an integer too long)") from None
+
+
+def _finite(v) -> bool:
+    """A finite float, or an integer a float holds (math.isfinite raises OverflowError
+    for one past the largest float)."""
+    try:
+        return math.isfinite(v)
+    except OverflowError:
+        return False
+
+
+def _shown(v) -> str:
+    """A value as a line shows it: an integer past a float by its digits."""
+    if isinstance(v, int) and not _finite(v):
+        return f"an integer of {len(str(abs(v)))} digits"
+    return repr(v)
 
 
 class Fields:
@@ -55,8 +74,10 @@ class Fields:
         if key not in d:
             return default
         v = d[key]
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
             self.fail(where, f"must be a number, got {v!r}")
+        if not _finite(v):
+            self.fail(where, f"must be a finite number, got {_shown(v)}")
         if positive and v <= 0:
             self.fail(where, f"must be positive, got {v!r}")
         return float(v)
@@ -64,6 +85,8 @@ class Fields:
     def within(self, v, allowed, where: str):
         """v if an ebrl.readings.Range allows it, else the field's MountError saying the
         range ("must be at least 0.001, got 1e-300")."""
+        if isinstance(v, int) and not isinstance(v, bool) and not _finite(v):
+            self.fail(where, f"must be a finite number, got {_shown(v)}")
         problem = allowed.problem(v)
         if problem is not None:
             self.fail(where, f"{problem}, got {v!r}")

@@ -160,7 +160,30 @@ def rest_values(mount) -> tuple[tuple[str, float], ...]:
         if j < 0 or int(model.jnt_type[j]) not in plain:
             fail(mount.path, field, f"no hinge or slide named {name!r} in {mount.model}")
         out_of_range(mount, field, model, j, value, "")
+        unlimited(mount, field, model, j, value)
     return tuple((name, value) for name, value, _ in pairs)
+
+
+#: Where a joint without limits may rest: a hinge within a turn either way (rad), a
+#: slide within UNLIMITED_SLIDE m (farther than a room's side; MuJoCo's positions lose
+#: their precision long before 1e20).
+UNLIMITED_HINGE = 2 * math.pi
+UNLIMITED_SLIDE = 1000.0
+
+
+def unlimited(mount, field, model, j, value):
+    """MountError at `field` when a joint without limits (joint j of the file's model)
+    rests farther than UNLIMITED_HINGE or UNLIMITED_SLIDE."""
+    if model.jnt_limited[j]:
+        return
+    import mujoco
+    hinge = int(model.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_HINGE)
+    bound, unit = (UNLIMITED_HINGE, "rad (a turn either way)") if hinge else \
+        (UNLIMITED_SLIDE, "m")
+    if not -bound <= value <= bound:
+        name = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)
+        fail(mount.path, field, f"joint {name!r} has no limits; its rest must be within "
+                                f"[{-bound:.4g}, {bound:.4g}] {unit}, got {value:.4g}")
 
 
 def out_of_range(mount, field, model, j, value, how, advice=""):
