@@ -24,7 +24,7 @@ from dm_control.rl import control  # noqa: E402
 import models  # noqa: E402
 from models import rooms  # noqa: E402
 
-from tasks import navigation, placement, render  # noqa: E402
+from tasks import beams, navigation, placement, render  # noqa: E402
 from tasks.config import TaskConfig  # noqa: E402
 from tasks.realisations import REALISATIONS  # noqa: E402
 from tasks.robots import DRIVES, MOUNTS, PAPER_ROBOTS, ROBOTS, Robot, resolve  # noqa: E402
@@ -121,6 +121,21 @@ def _source(entry):
     return f"mount {entry.mount.path}" if entry.mount is not None else f"robot file {entry.model}"
 
 
+def _refusal(entry, e):
+    """The one line of a ContractError at load: the robot file's, or a mounted robot's
+    naming the mount's field that fixes it (ContractError.field)."""
+    if entry.mount is not None and e.field is not None:
+        return f"{_source(entry)}: {e.field}: {e}"
+    return f"{_source(entry)}: {e}"
+
+
+def _beams_field(entry):
+    """The mount's field that sets a mounted robot's beams (None for a robot file)."""
+    if entry.mount is None:
+        return None
+    return "beams.height" if entry.mount.beams.added else "beams.sensors"
+
+
 def load(robot: str | os.PathLike | Robot, *, drive: str | None = None, seed: int | None = None,
          config: TaskConfig | None = None, room=None, **fields) -> Environment:
     """The navigation environment for `robot`: a name in tasks.ROBOTS or tasks.MOUNTS, a
@@ -139,8 +154,9 @@ def load(robot: str | os.PathLike | Robot, *, drive: str | None = None, seed: in
     try:
         physics = physics_cls.from_model(wrapper.MjModel(model))
         placement.check_start(physics, heading=entry.drive == "two_wheel")
+        beams.check_self_hits(physics, _beams_field(entry))   # none reads the robot itself
     except navigation.ContractError as e:
-        raise navigation.ContractError(f"{_source(entry)}: {e}") from None
+        raise navigation.ContractError(_refusal(entry, e), e.field) from None
     task = task_cls(config, time_scale=entry.time_scale, random=np.random.RandomState(seed))
     # n_sub_steps 0: dm_control's step runs no substeps of its own; the drive's action
     # (before_step) runs its phases' substeps.
