@@ -7,7 +7,8 @@ from experiments.commands.common import check_room, fail
 def add_parser(subparsers):
     p = subparsers.add_parser("bench", help="microseconds per agent step, by part")
     p.add_argument("--robot", type=arguments.robot_list, default=arguments.robot_list("all"),
-                   help="default: every registered robot")
+                   metavar="NAME[,NAME...]|FILE",
+                   help=arguments.robot_help(True, "all", xml=False))
     p.add_argument("--steps", type=arguments.up_to(validate.MAX_BENCH_STEPS), default=2000,
                    help="timed steps per block")
     p.add_argument("--blocks", type=arguments.up_to(validate.MAX_BENCH_BLOCKS), default=5,
