@@ -52,6 +52,9 @@ class ContractError(ValueError):
         super().__init__(message)
         self.field = field
 
+    def __reduce__(self):   # its field too, from a worker process
+        return type(self), (str(self), self.field)
+
 
 #: The integrators a robot's entry may name (MuJoCo's mjtIntegrator, by its <option> name).
 INTEGRATORS = ("Euler", "RK4", "implicit", "implicitfast")

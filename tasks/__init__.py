@@ -96,8 +96,8 @@ def compile_robot(entry: Robot, config: TaskConfig = TaskConfig(),
     try:
         model = spec.compile()
     except ValueError as e:
-        raise ValueError(f"{_source(entry)} does not compile in the room: "
-                         f"{str(e).splitlines()[0]}") from None
+        raise ValueError(_refusal(entry, f"the robot does not compile in the room: "
+                                         f"{str(e).splitlines()[0]}", "file")) from None
     if room is not None:
         radius = navigation.robot_radius(model) if navigation.named_id(
             model, mujoco.mjtObj.mjOBJ_GEOM, "hull") >= 0 else 0.0
@@ -116,17 +116,15 @@ def compiled_model(entry: Robot, config: TaskConfig = TaskConfig(),
     return model, hashlib.sha256(spec.to_xml().encode()).hexdigest()[:16]
 
 
-def _source(entry):
-    """What an error names: the mount file of a mounted robot, else the robot file."""
-    return f"mount {entry.mount.path}" if entry.mount is not None else f"robot file {entry.model}"
-
-
-def _refusal(entry, e):
-    """The one line of a ContractError at load: the robot file's, or a mounted robot's
-    naming the mount's field that fixes it (ContractError.field)."""
-    if entry.mount is not None and e.field is not None:
-        return f"{_source(entry)}: {e.field}: {e}"
-    return f"{_source(entry)}: {e}"
+def _refusal(entry, problem, field=None):
+    """The one line of a robot refused at load: a mounted robot's in the mount's style,
+    ``FILE: FIELD: problem`` (tasks.mount.MountError's; the field that fixes it, "file"
+    where the robot file itself must change), a robot file's ``robot file FILE: problem``.
+    problem: a message, or a ContractError (its field, ContractError.field)."""
+    field = getattr(problem, "field", None) or field
+    if entry.mount is not None:
+        return f"{entry.mount.path}: {field or 'file'}: {problem}"
+    return f"robot file {entry.model}: {problem}"
 
 
 def _beams_field(entry):

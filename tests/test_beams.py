@@ -61,7 +61,7 @@ def test_beams_that_hit_the_boxheads_own_eyes_are_refused_at_load_naming_beam_an
     with pytest.raises(tasks.navigation.ContractError) as refused:
         tasks.load(str(path), seed=0)
     line = str(refused.value)
-    assert "\n" not in line and line.startswith(f"mount {path.resolve()}: beams.height: "), line
+    assert "\n" not in line and line.startswith(f"{path.resolve()}: beams.height: "), line
     for beam, eye in (("range_0", "eye_l"), ("range_2", "eye_l"), ("range_4", "eye_r"),
                       ("range_6", "eye_r")):
         assert f"'{beam}' (its geom '{eye}'," in line, line
