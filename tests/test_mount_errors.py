@@ -82,3 +82,36 @@ def test_the_joints_that_fit_follow_the_base_and_the_action(tmp_path):
         f"{path}: joints: body 'cart' has no free joint and no slides along x and y to move "
         "it in the room (its own: 'steer', a hinge): joints = \"slides\" adds slides x and y "
         "beside them (the base held at its height: a planar robot)")
+
+
+def _docs():
+    return (ROOT / "docs" / "adding_a_robot.md").read_text()
+
+
+def _docs_block(marker):
+    """docs/adding_a_robot.md's TOML block that holds `marker`."""
+    blocks = [b.split("```", 1)[0] for b in _docs().split("```toml\n")[1:]]
+    return next(b for b in blocks if marker in b)
+
+
+def test_the_docs_boxhead_is_the_one_tested_here():
+    """docs/adding_a_robot.md's boxhead (beams see the room) is test_beams' at -0.2 m,
+    which `ebrl check` passes (test_beams), but for its comments."""
+    docs = _docs_block("boxhead.xml")
+    strip = lambda text: [line.split("#")[0].rstrip() for line in text.splitlines()]  # noqa: E731
+    assert strip(docs) == strip(BOXHEAD)
+
+
+@pytest.mark.parametrize("name, text", [
+    ("my_boxhead", test_beams.BOXHEAD.format(height=0.0)),
+    ("my_boxhead", BOXHEAD.replace('"slides_z"', '"free"')),
+    ("my_ball", None),
+])
+def test_the_docs_quote_the_lines_the_commands_print(tmp_path, name, text):
+    """Each refusal docs/adding_a_robot.md quotes for the boxhead and the rolling ball is
+    the line `ebrl check` prints, but for the folder (/home/me in the docs)."""
+    if text is None:   # the docs' rolling ball without its forward = "y"
+        text = _docs_block("jumping_ball_with_head.xml").replace('forward = "y"', "")
+    line, path = _refused(tmp_path, name, text)
+    quoted = line.replace(str(path), f"/home/me/{name}.toml")
+    assert quoted in _docs().splitlines(), quoted
