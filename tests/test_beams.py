@@ -126,7 +126,7 @@ def test_the_check_fails_a_beam_that_reads_the_floor_in_open_space(tmp_path):
     beam."""
     path = _two_wheel(tmp_path, lambda t: t.replace('name="range_3" class="beam" zaxis="1 0 0"',
                                                     'name="range_3" class="beam" zaxis="1 0 -0.5"'))
-    errors, limits, seen = robotcheck.free_space(str(path), 20, drive="two_wheel")
+    errors, limits, seen, _ = robotcheck.free_space(str(path), 20, drive="two_wheel")
     assert seen["range_3"][0] == 20 and seen["range_3"][1] > 2.0, seen
     assert all(seen[f"range_{i}"] == (0, 0.0) for i in (0, 1, 2, 4, 5, 6)), seen
     heights, wall = robotcheck.beam_heights(str(path), "two_wheel")

@@ -60,7 +60,7 @@ def accuracy(robot, actions=1000, seed=0, drive=None, room=None):
     """Errors of random noise-free actions in free space: for the two_wheel drive,
     |achieved - commanded| turn (rad) and move (units); for the floating drive, the
     velocity change (units/step) on each axis. Returns the error arrays and limits."""
-    errors, limits, _ = free_space(robot, actions, seed, drive, room)
+    errors, limits, _, _ = free_space(robot, actions, seed, drive, room)
     return errors, limits
 
 
@@ -69,9 +69,11 @@ BEAM_TOLERANCE = 1e-6
 
 
 def free_space(robot, actions=1000, seed=0, drive=None, room=None):
-    """`accuracy`'s errors and limits, and the beams in free space: {beam: (readings nearer
+    """`accuracy`'s errors and limits; the beams in free space: {beam: (readings nearer
     than the nearest wall is to the beam's origin, the largest shortfall in units)} after
-    each action, for every beam."""
+    each action, for every beam; and the errors signed by their commands (> 0: the turn,
+    move or velocity change went past the command; < 0: it fell short), which tell a
+    drive too weak or too slow from one too strong (its gains, its time_scale)."""
     import models
     import tasks
     from tasks import beams, floating, two_wheel
@@ -84,7 +86,7 @@ def free_space(robot, actions=1000, seed=0, drive=None, room=None):
     short = np.zeros(len(names), dtype=int)
     worst = np.zeros(len(names))
     rng = np.random.default_rng(seed)
-    errors = {}
+    errors, signs = {}, {}
     try:
         for _ in range(actions):
             if entry.drive == "two_wheel":
@@ -97,6 +99,8 @@ def free_space(robot, actions=1000, seed=0, drive=None, room=None):
                     math.remainder(h1 - h0, 2 * math.pi) + a * two_wheel.MAX_TURN)
                 errors.setdefault("move", []).append(
                     math.hypot(x1 - x0, y1 - y0) - two_wheel.MAX_MOVE * (1.0 - abs(a)))
+                signs.setdefault("turn", []).append(-np.sign(a))   # the command: -a rad
+                signs.setdefault("move", []).append(1.0)
             else:
                 physics.set_robot_pose(x, y, 0.0)
                 a = rng.uniform(-1.0, 1.0, 2)
@@ -104,6 +108,8 @@ def free_space(robot, actions=1000, seed=0, drive=None, room=None):
                 dv = physics.robot_velocity() - floating.MAX_ACCELERATION * a
                 errors.setdefault("velocity_x", []).append(dv[0])
                 errors.setdefault("velocity_y", []).append(dv[1])
+                signs.setdefault("velocity_x", []).append(np.sign(a[0]))
+                signs.setdefault("velocity_y", []).append(np.sign(a[1]))
             # a reading (from the beam's origin) nearer than the nearest wall is to it
             walls = [clearance(layout, ox, oy) for ox, oy, _ in beams.origins(physics)]
             shortfall = np.asarray(walls) - (physics.ranges() + physics.robot_radius)
@@ -116,7 +122,15 @@ def free_space(robot, actions=1000, seed=0, drive=None, room=None):
               {k: ACCURACY * floating.MAX_ACCELERATION for k in ("velocity_x", "velocity_y")})
     limits.update((k, v) for k, v in entry.accuracy_limits if k in limits)  # a body's own
     seen = {name: (int(n), float(w)) for name, n, w in zip(names, short, worst)}
-    return {k: np.abs(v) for k, v in errors.items()}, limits, seen
+    signed = {k: np.asarray(v) * np.asarray(signs[k]) for k, v in errors.items()}
+    return {k: np.abs(v) for k, v in errors.items()}, limits, seen, signed
+
+
+def way(signed):
+    """How the errors signed by their commands (free_space's) fall: 'N% short of the
+    command, M% past it'."""
+    short, past = (100.0 * float(np.mean(signed < 0.0)), 100.0 * float(np.mean(signed > 0.0)))
+    return f"{short:.0f}% short of the command, {past:.0f}% past it"
 
 
 def beam_heights(robot, drive=None, room=None):
@@ -220,7 +234,8 @@ def main(robots, actions, accuracy_actions, drive=None, room=None):
     from tasks import navigation
     failed = 0
     for robot in robots:
-        errors, limits, seen = free_space(robot, accuracy_actions, drive=drive, room=room)
+        errors, limits, seen, signed = free_space(robot, accuracy_actions, drive=drive,
+                                                  room=room)
         lines, beams_failed = beam_lines(robot, accuracy_actions, seen, *beam_heights(robot, drive, room))
         failed += beams_failed
         for line in lines:
@@ -229,8 +244,8 @@ def main(robots, actions, accuracy_actions, drive=None, room=None):
             ok = e.max() <= limits[key]
             failed += not ok
             print(f"{robot}: {key} error over {len(e)} free-space actions: median {np.median(e):.4f}, "
-                  f"95% {np.percentile(e, 95):.4f}, max {e.max():.4f} (limit {limits[key]:.3f}) "
-                  f"{'ok' if ok else 'FAIL'}")
+                  f"95% {np.percentile(e, 95):.4f}, max {e.max():.4f} (limit {limits[key]:.3f}; "
+                  f"{way(signed[key])}) {'ok' if ok else 'FAIL'}")
         r = fuzz(robot, actions, drive=drive, room=room)
         max_tilt = navigation.MAX_TILT_DEGREES
         if "falls" in dict(tasks.resolve(robot, drive).accuracy_limits):
