@@ -43,8 +43,18 @@ MODEL_DIR = pathlib.Path(__file__).resolve().parent
 
 
 class ContractError(ValueError):
-    """A robot file that lacks a part the naming contract asks for (docs/adding_a_robot.md);
-    tasks.navigation reads the contract."""
+    """A robot file that lacks a part the naming contract asks for (docs/adding_a_robot.md),
+    or has one the room cannot honour; tasks.navigation reads the contract. `field`: the
+    mount's field that fixes it, for a mounted robot (tasks.load names the mount file and
+    the field: ``FILE: FIELD: problem``); None where the robot file itself must change."""
+
+    def __init__(self, message, field=None):
+        super().__init__(message)
+        self.field = field
+
+    def __reduce__(self):   # its field too, from a worker process
+        return type(self), (str(self), self.field)
+
 
 #: The integrators a robot's entry may name (MuJoCo's mjtIntegrator, by its <option> name).
 INTEGRATORS = ("Euler", "RK4", "implicit", "implicitfast")

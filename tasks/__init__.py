@@ -24,7 +24,7 @@ from dm_control.rl import control  # noqa: E402
 import models  # noqa: E402
 from models import rooms  # noqa: E402
 
-from tasks import navigation, placement, render  # noqa: E402
+from tasks import beams, navigation, placement, render  # noqa: E402
 from tasks.config import TaskConfig  # noqa: E402
 from tasks.realisations import REALISATIONS  # noqa: E402
 from tasks.robots import DRIVES, MOUNTS, PAPER_ROBOTS, ROBOTS, Robot, resolve  # noqa: E402
@@ -96,8 +96,8 @@ def compile_robot(entry: Robot, config: TaskConfig = TaskConfig(),
     try:
         model = spec.compile()
     except ValueError as e:
-        raise ValueError(f"{_source(entry)} does not compile in the room: "
-                         f"{str(e).splitlines()[0]}") from None
+        raise ValueError(_refusal(entry, f"the robot does not compile in the room: "
+                                         f"{str(e).splitlines()[0]}", "file")) from None
     if room is not None:
         radius = navigation.robot_radius(model) if navigation.named_id(
             model, mujoco.mjtObj.mjOBJ_GEOM, "hull") >= 0 else 0.0
@@ -116,9 +116,22 @@ def compiled_model(entry: Robot, config: TaskConfig = TaskConfig(),
     return model, hashlib.sha256(spec.to_xml().encode()).hexdigest()[:16]
 
 
-def _source(entry):
-    """What an error names: the mount file of a mounted robot, else the robot file."""
-    return f"mount {entry.mount.path}" if entry.mount is not None else f"robot file {entry.model}"
+def _refusal(entry, problem, field=None):
+    """The one line of a robot refused at load: a mounted robot's in the mount's style,
+    ``FILE: FIELD: problem`` (tasks.mount.MountError's; the field that fixes it, "file"
+    where the robot file itself must change), a robot file's ``robot file FILE: problem``.
+    problem: a message, or a ContractError (its field, ContractError.field)."""
+    field = getattr(problem, "field", None) or field
+    if entry.mount is not None:
+        return f"{entry.mount.path}: {field or 'file'}: {problem}"
+    return f"robot file {entry.model}: {problem}"
+
+
+def _beams_field(entry):
+    """The mount's field that sets a mounted robot's beams (None for a robot file)."""
+    if entry.mount is None:
+        return None
+    return "beams.height" if entry.mount.beams.added else "beams.sensors"
 
 
 def load(robot: str | os.PathLike | Robot, *, drive: str | None = None, seed: int | None = None,
@@ -139,8 +152,9 @@ def load(robot: str | os.PathLike | Robot, *, drive: str | None = None, seed: in
     try:
         physics = physics_cls.from_model(wrapper.MjModel(model))
         placement.check_start(physics, heading=entry.drive == "two_wheel")
+        beams.check_self_hits(physics, _beams_field(entry))   # none reads the robot itself
     except navigation.ContractError as e:
-        raise navigation.ContractError(f"{_source(entry)}: {e}") from None
+        raise navigation.ContractError(_refusal(entry, e), e.field) from None
     task = task_cls(config, time_scale=entry.time_scale, random=np.random.RandomState(seed))
     # n_sub_steps 0: dm_control's step runs no substeps of its own; the drive's action
     # (before_step) runs its phases' substeps.

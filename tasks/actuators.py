@@ -175,12 +175,12 @@ def control_ranges(model, actuators):
     return lo, hi
 
 
-def require_independent(forces, mtm, what):
-    """models.ContractError naming `what` when the motors, of forces `forces` on two joints
+def require_independent(forces, mtm, field):
+    """models.ContractError naming the mount's `field` when the motors, of forces `forces` on two joints
     and Gram matrix mtm (a, b, e, det: tasks.kernels.plan.gram), cannot move the two
     joints apart: the determinant 0, to rounding."""
     from models import ContractError
     a, _, e, det = mtm
     if abs(det) <= 1e-12 * max(1e-300, a + e) ** 2:
-        raise ContractError(f"{what}: the motors do not move the two joints independently "
-                            f"(force per unit control on them: {forces.tolist()})")
+        raise ContractError("the motors do not move the two joints independently (force per "
+                            f"unit control on them: {forces.tolist()})", field=field)

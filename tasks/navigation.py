@@ -67,7 +67,7 @@ def edit_model(spec, config):
             geom = spec.geom(PREFIX + spec_name(spec, name))
             if geom is None:
                 if part:
-                    raise ContractError(NO_HULL)
+                    raise ContractError(NO_HULL, field="bumper")
                 continue
             geom.size[0] = config.radius * unit
 
@@ -99,7 +99,7 @@ def robot_radius(model):
     compiled room (an MjModel or dm_control's wrapper); ContractError without a hull."""
     hull = named_id(model, mujoco.mjtObj.mjOBJ_GEOM, "hull")
     if hull < 0:
-        raise ContractError(NO_HULL)
+        raise ContractError(NO_HULL, field="bumper")
     return getattr(model, "ptr", model).geom_size[hull, 0] / unit_of(model)
 
 
@@ -118,15 +118,16 @@ class Physics(dm_mujoco.Physics):
         self.unit = unit = unit_of(mjm)
         self._base = named_id(m, mujoco.mjtObj.mjOBJ_BODY, "base")
         if self._base < 0:
-            raise ContractError("no body named 'base' (the robot's base body)")
+            raise ContractError("no body named 'base' (the robot's base body)", field="base")
         #: The robot's radius in units: its hull's (sphere or cylinder) radius.
         self.robot_radius = robot_radius(m)
         beams = np.flatnonzero(m.sensor_type == mujoco.mjtSensor.mjSENS_RANGEFINDER)
         if not len(beams):
-            raise ContractError("no rangefinder sensors")
+            raise ContractError("no rangefinder sensors", field="beams")
         adr = m.sensor_adr[beams]
         if not np.array_equal(adr, np.arange(adr[0], adr[0] + len(adr))):
-            raise ContractError("rangefinders must be declared one after another")
+            raise ContractError("rangefinders must be declared one after another",
+                                field="beams.sensors")
         self._beams = slice(int(adr[0]), int(adr[0]) + len(adr))
         #: The robot's rest pose (a qpos): its model's qpos0, or its mount's rest
         #: (models.rest_qpos); a pose is set from it, the drives read their rest from it.

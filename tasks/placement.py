@@ -77,7 +77,7 @@ def base_joints(model, base, rest):
     adr = {role: int(model.jnt_qposadr[j]) for role, j in roles.items()}
     if "x" not in adr or "y" not in adr:
         raise ContractError("the base body needs a free joint, or slide joints along "
-                            "x and y (and optionally a hinge about z)")
+                            "x and y (and optionally a hinge about z)", field="joints")
     return BaseJoints(roles=roles, qx=adr["x"], qy=adr["y"], qyaw=adr.get("yaw"),
                       x_sign=signs["x"], y_sign=signs["y"], yaw_sign=signs["yaw"],
                       own=len(joints) > len(roles))
@@ -166,9 +166,9 @@ def check_start(physics, heading=True):
     if inside and math.hypot(px - x, py - y) <= START_TOLERANCE:
         raise ContractError(f"{placed} faces {ph:.2f} rad: its base has no hinge about z "
                             f"(or -z) to face the start heading (a mount's joints = "
-                            f"\"planar\" adds one, \"free\" a free joint)")
+                            f"\"planar\" adds one, \"free\" a free joint)", field="joints")
     where = "outside the room's free space" if not inside else "not where it was placed"
     raise ContractError(
         f"{placed} stands at ({px:.2f}, {py:.2f}) facing {ph:.2f} rad, {where}: its base's "
         f"joints do not move it in the room's plane (a mount's joints = \"planar\", "
-        f"\"slides\" or \"free\" adds joints that do)")
+        f"\"slides\" or \"free\" adds joints that do)", field="joints")

@@ -53,7 +53,7 @@ joints = "{joints}"
 shape = "sphere"
 radius = 0.15
 [beams]
-height = 0.0
+height = {beams}
 [action]
 kind = "{kind}"
 {action}
@@ -72,13 +72,14 @@ TURNS = {
 
 
 def _cart(tmp_path, turn=("", "", ""), steer="0 0 1", nose="0.1 0 0", gear="1 0 0 0 0 0",
-          joints="slides", kind="servos", action="", extra=""):
+          joints="slides", kind="servos", action="", extra="", beams=0.0):
     """The cart's file and a mount of it in tmp_path; returns the mount's path."""
     opened, orient, close = turn
     (tmp_path / "cart.xml").write_text(CART.format(open=opened, orient=orient, close=close,
                                                    steer=steer, nose=nose, gear=gear))
     path = tmp_path / "cart.toml"
-    path.write_text(CART_MOUNT.format(joints=joints, kind=kind, action=action, extra=extra))
+    path.write_text(CART_MOUNT.format(joints=joints, kind=kind, action=action, extra=extra,
+                                      beams=beams))
     return path
 
 
@@ -120,8 +121,10 @@ def test_a_base_tilted_in_its_file_is_read_from_an_upright_frame(tmp_path):
     """A base whose z axis is horizontal in its file (zaxis="0 -1 0": a y-up file standing
     upright in the world): joints = "planar" adds slides and a yaw hinge along the
     room's axes, the mount adds the robot's upright frame (the site ebrl_frame), from
-    which the pose is read; it stands at the start, turns and moves."""
-    path = _cart(tmp_path, ("", 'zaxis="0 -1 0"', ""), joints="planar")
+    which the pose is read; it stands at the start, turns and moves. Its beams 0.1 m up:
+    tilted, the antenna (a child body's geom) lies across the plane of beams at the
+    base's centre, and a beam that reads the robot itself is refused (tasks.beams)."""
+    path = _cart(tmp_path, ("", 'zaxis="0 -1 0"', ""), joints="planar", beams=0.1)
     m, _ = tasks.compile_robot(tasks.resolve(str(path)))
     assert mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "robot/ebrl_frame") >= 0
     env = _quiet(path)

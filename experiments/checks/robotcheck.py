@@ -6,6 +6,11 @@ file as much as for the registered ones.
 - `fuzz`: random actions that keep ramming walls, in episodes like the protocol's: the
   robot never ends inside an obstacle (by more than it may sink), stays upright (tilt
   under navigation.MAX_TILT_DEGREES), never gives NaN or a MuJoCo warning.
+- the beams (tasks.beams): at the start, each between the floor and the walls' top
+  (models.rooms.WALL_HEIGHT: a beam over the walls sees nothing of the room); after each
+  free-space action of the accuracy check, none reads nearer than the nearest wall is to
+  its origin (a nearer reading is the robot itself, or the floor: a robot that reads
+  contact in open space is blind).
 """
 import math
 import time
@@ -55,15 +60,33 @@ def accuracy(robot, actions=1000, seed=0, drive=None, room=None):
     """Errors of random noise-free actions in free space: for the two_wheel drive,
     |achieved - commanded| turn (rad) and move (units); for the floating drive, the
     velocity change (units/step) on each axis. Returns the error arrays and limits."""
+    errors, limits, _, _ = free_space(robot, actions, seed, drive, room)
+    return errors, limits
+
+
+#: How much nearer (units) than the nearest wall a beam may read in free space: rounding.
+BEAM_TOLERANCE = 1e-6
+
+
+def free_space(robot, actions=1000, seed=0, drive=None, room=None):
+    """`accuracy`'s errors and limits; the beams in free space: {beam: (readings nearer
+    than the nearest wall is to the beam's origin, the largest shortfall in units)} after
+    each action, for every beam; and the errors signed by their commands (> 0: the turn,
+    move or velocity change went past the command; < 0: it fell short), which tell a
+    drive too weak or too slow from one too strong (its gains, its time_scale)."""
     import models
     import tasks
-    from tasks import floating, two_wheel
+    from tasks import beams, floating, two_wheel
     entry = tasks.resolve(robot, drive)
     env = _quiet(entry, None, room)
     physics = env.physics
-    x, y = open_spot(models.room_layout(physics.model))
+    layout = models.room_layout(physics.model)
+    x, y = open_spot(layout)
+    names = beams.beam_names(physics.model.ptr)
+    short = np.zeros(len(names), dtype=int)
+    worst = np.zeros(len(names))
     rng = np.random.default_rng(seed)
-    errors = {}
+    errors, signs = {}, {}
     try:
         for _ in range(actions):
             if entry.drive == "two_wheel":
@@ -76,6 +99,8 @@ def accuracy(robot, actions=1000, seed=0, drive=None, room=None):
                     math.remainder(h1 - h0, 2 * math.pi) + a * two_wheel.MAX_TURN)
                 errors.setdefault("move", []).append(
                     math.hypot(x1 - x0, y1 - y0) - two_wheel.MAX_MOVE * (1.0 - abs(a)))
+                signs.setdefault("turn", []).append(-np.sign(a))   # the command: -a rad
+                signs.setdefault("move", []).append(1.0)
             else:
                 physics.set_robot_pose(x, y, 0.0)
                 a = rng.uniform(-1.0, 1.0, 2)
@@ -83,13 +108,75 @@ def accuracy(robot, actions=1000, seed=0, drive=None, room=None):
                 dv = physics.robot_velocity() - floating.MAX_ACCELERATION * a
                 errors.setdefault("velocity_x", []).append(dv[0])
                 errors.setdefault("velocity_y", []).append(dv[1])
+                signs.setdefault("velocity_x", []).append(np.sign(a[0]))
+                signs.setdefault("velocity_y", []).append(np.sign(a[1]))
+            # a reading (from the beam's origin) nearer than the nearest wall is to it
+            walls = [clearance(layout, ox, oy) for ox, oy, _ in beams.origins(physics)]
+            shortfall = np.asarray(walls) - (physics.ranges() + physics.robot_radius)
+            short += shortfall > BEAM_TOLERANCE
+            worst = np.maximum(worst, shortfall)
     finally:
         env.close()
     limits = ({"turn": ACCURACY * two_wheel.MAX_TURN, "move": ACCURACY * two_wheel.MAX_MOVE}
               if entry.drive == "two_wheel" else
               {k: ACCURACY * floating.MAX_ACCELERATION for k in ("velocity_x", "velocity_y")})
     limits.update((k, v) for k, v in entry.accuracy_limits if k in limits)  # a body's own
-    return {k: np.abs(v) for k, v in errors.items()}, limits
+    seen = {name: (int(n), float(w)) for name, n, w in zip(names, short, worst)}
+    signed = {k: np.asarray(v) * np.asarray(signs[k]) for k, v in errors.items()}
+    return {k: np.abs(v) for k, v in errors.items()}, limits, seen, signed
+
+
+def way(signed):
+    """How the errors signed by their commands (free_space's) fall: 'N% short of the
+    command, M% past it'."""
+    short, past = (100.0 * float(np.mean(signed < 0.0)), 100.0 * float(np.mean(signed > 0.0)))
+    return f"{short:.0f}% short of the command, {past:.0f}% past it"
+
+
+def beam_heights(robot, drive=None, room=None):
+    """Each beam's tasks.beams.Height at the start (units above the floor, where it leaves
+    the robot and at the end of its range), and the walls' height (units)."""
+    import tasks
+    from models import rooms
+    from tasks import beams
+    entry = tasks.resolve(robot, drive)
+    env = _quiet(entry, None, room)
+    try:
+        return beams.heights(env.physics, env.task.config.sensor_range), rooms.WALL_HEIGHT
+    finally:
+        env.close()
+
+
+def beam_lines(robot, actions, seen, heights, wall):
+    """The check's lines on the beams, each ending ok or FAIL, and how many failed: the
+    beams over the walls' top (or under the floor) at the start, and those that read
+    nearer than any wall in free space (seen: free_space's)."""
+    lines, failed = [], 0
+    out = [h for h in heights if not (0.0 < h.origin < wall and 0.0 < h.end < wall)]
+    low = min(min(h.origin, h.end) for h in heights)
+    high = max(max(h.origin, h.end) for h in heights)
+    if out:
+        failed += 1
+        listed = ", ".join(f"{h.beam} ({h.origin:.2f} to {h.end:.2f})" for h in out)
+        lines.append(f"{robot}: beams outside the walls' height (0 to {wall:g} units) at the "
+                     f"start: {listed} units above the floor, so they see nothing of the "
+                     "room: set the beams lower FAIL")
+    else:
+        lines.append(f"{robot}: beams at the start {low:.2f} to {high:.2f} units above the "
+                     f"floor, under the walls' top ({wall:g} units) ok")
+    blind = {name: v for name, v in seen.items() if v[0]}
+    actions = f"{actions} free-space actions"
+    if blind:
+        failed += 1
+        listed = ", ".join(f"{name} ({n} times, up to {w:.2f} units short)"
+                           for name, (n, w) in blind.items())
+        lines.append(f"{robot}: beams that read nearer than any wall after {actions}: "
+                     f"{listed}: they see the robot itself (or the floor), not the room "
+                     "FAIL")
+    else:
+        lines.append(f"{robot}: beams after {actions}: no reading nearer than the nearest "
+                     "wall ok")
+    return lines, failed
 
 
 def fuzz(robot, actions=100_000, seed=0, drive=None, room=None):
@@ -147,13 +234,18 @@ def main(robots, actions, accuracy_actions, drive=None, room=None):
     from tasks import navigation
     failed = 0
     for robot in robots:
-        errors, limits = accuracy(robot, accuracy_actions, drive=drive, room=room)
+        errors, limits, seen, signed = free_space(robot, accuracy_actions, drive=drive,
+                                                  room=room)
+        lines, beams_failed = beam_lines(robot, accuracy_actions, seen, *beam_heights(robot, drive, room))
+        failed += beams_failed
+        for line in lines:
+            print(line)
         for key, e in errors.items():
             ok = e.max() <= limits[key]
             failed += not ok
             print(f"{robot}: {key} error over {len(e)} free-space actions: median {np.median(e):.4f}, "
-                  f"95% {np.percentile(e, 95):.4f}, max {e.max():.4f} (limit {limits[key]:.3f}) "
-                  f"{'ok' if ok else 'FAIL'}")
+                  f"95% {np.percentile(e, 95):.4f}, max {e.max():.4f} (limit {limits[key]:.3f}; "
+                  f"{way(signed[key])}) {'ok' if ok else 'FAIL'}")
         r = fuzz(robot, actions, drive=drive, room=room)
         max_tilt = navigation.MAX_TILT_DEGREES
         if "falls" in dict(tasks.resolve(robot, drive).accuracy_limits):

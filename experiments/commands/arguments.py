@@ -42,17 +42,47 @@ def _one_robot(text):
     return robots[0]
 
 
+def robot_help(several, default, xml=True):
+    """What --robot takes, as robot_list reads it: the registered robots, the shipped
+    mounts, a mount file, (xml) a robot file with --drive and (several) lists."""
+    from tasks.robots import MOUNTS, ROBOTS
+    takes = (f"a registered robot ({', '.join(ROBOTS)}), a shipped mount ({', '.join(MOUNTS)}; "
+             "'ebrl robots' lists both), a mount file (.toml: docs/adding_a_robot.md)"
+             + (" or a robot file of the naming contract (.xml, with --drive)" if xml else ""))
+    if several:
+        takes += ("; several names joined by commas, 'paper' (the paper's two) or 'all' "
+                  f"(every registered robot); default: {default}")
+    return takes
+
+
 def add_robots(parser, default, several=True):
-    """--robot and --drive, from the registry."""
+    """--robot and --drive, from the registry; the help lists what --robot takes."""
     from tasks.robots import DRIVES
+    takes = robot_help(several, default)
     if several:
         parser.add_argument("--robot", type=robot_list, default=robot_list(default),
-                            help=f"default: {default}; see 'ebrl robots'")
+                            metavar="NAME[,NAME...]|FILE", help=takes)
     else:
-        parser.add_argument("--robot", type=_one_robot, required=True,
-                            help="a registered name (see 'ebrl robots') or a robot .xml file")
+        parser.add_argument("--robot", type=_one_robot, required=True, metavar="NAME|FILE",
+                            help=takes)
     parser.add_argument("--drive", type=choice(tuple(DRIVES)), default=None,
-                        help="the drive of a robot given as a file: " + ", ".join(DRIVES))
+                        help="the drive of a robot given as a .xml file: " + ", ".join(DRIVES))
+
+
+def add_condition(parser, every=True, default="all", also=""):
+    """--condition: one of the paper's conditions (ebrl.intrinsic.CONDITIONS), or (every)
+    "all"; its help lists the values."""
+    from ebrl.intrinsic import CONDITIONS
+    values = CONDITIONS + (("all",) if every else ())
+    what = {"random": "the intrinsic behaviour a random walk",
+            "avoidance": "the intrinsic behaviour Section 3.4's obstacle avoidance"}
+    listed = "; ".join(f"{c}: {what[c]}" for c in CONDITIONS)
+    parser.add_argument("--condition", type=choice(values), default=default,
+                        metavar="{" + ",".join(values) + "}",
+                        help=f"the paper's condition (Section 3.6): {listed}"
+                             + ("; all: both" if every else "")
+                             + (f"; default: {default}" if default is not None else "")
+                             + also)
 
 
 def argument(check):

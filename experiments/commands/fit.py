@@ -30,7 +30,8 @@ def add_parser(subparsers):
                         "against the paper's first-trial distributions (--robot; 64 or "
                         "more --seeds), FIT_first_trial_DRIVE.md")
     p.add_argument("--robot", type=arguments.choice(("two_wheel", "floating")), default=None,
-                   help="--stage first-trial: the drive's robot to fit")
+                   help="--stage first-trial: the drive's robot to fit: two_wheel or floating "
+                        "(the paper's two)")
     p.add_argument("--space", default="all",
                    help="comma-separated readings to search (default: all; see FIT.md)")
     p.add_argument("--steps", type=arguments.up_to(validate.MAX_STEPS), default=None,

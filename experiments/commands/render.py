@@ -37,8 +37,8 @@ def add_parser(subparsers):
     p.add_argument("--camera", default="top",
                    help="top (default), perspective, follow (a perspective camera that "
                         "tracks the robot), or a camera of the robot's file (chase)")
-    p.add_argument("--condition", type=arguments.choice(paper.CONDITIONS), default=None,
-                   help="required, unless --compare condition")
+    arguments.add_condition(p, every=False, default=None,
+                            also="; required, unless --compare condition")
     p.add_argument("--seed", type=arguments.between(0, validate.MAX_SEED), required=True)
     p.add_argument("--steps", type=arguments.up_to(validate.MAX_STEPS), default=3000)
     p.add_argument("--set", type=arguments.override, action="append", default=[],

@@ -14,8 +14,7 @@ def add_parser(subparsers):
     p = subparsers.add_parser("run", help="run the protocol (skips runs already on disk)")
     arguments.add_robots(p, "paper")
     arguments.add_room(p)
-    p.add_argument("--condition", type=arguments.choice(paper.CONDITIONS + ("all",)),
-                   default="all")
+    arguments.add_condition(p)
     p.add_argument("--seeds", type=arguments.seeds, default=list(range(paper.SEEDS)),
                    help=f"e.g. 0-49 (default), 3, or 1,4,9; seeds 0 to {validate.MAX_SEED:,}, "
                         f"at most {validate.MAX_SEEDS:,} of them")

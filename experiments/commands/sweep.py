@@ -3,7 +3,6 @@ its own folder, then one table (optionally beside a baseline folder's runs at th
 import argparse
 import pathlib
 
-from experiments import paper
 from experiments.checks import validate
 from experiments.commands import arguments
 from experiments.commands.common import (check_agent, check_robots, fail, finish, plan,
@@ -20,8 +19,7 @@ def add_parser(subparsers):
                    help="comma-separated values (default: %(default)s)")
     arguments.add_robots(p, "paper")
     arguments.add_room(p)
-    p.add_argument("--condition", type=arguments.choice(paper.CONDITIONS + ("all",)),
-                   default="all")
+    arguments.add_condition(p)
     p.add_argument("--seeds", type=arguments.seeds, default=list(range(20)))
     p.add_argument("--steps", type=arguments.up_to(validate.MAX_STEPS), default=None)
     arguments.add_workers(p)

@@ -36,7 +36,10 @@ tasks.navigation reads, so a mounted model is as self-describing as a contract f
                                         # joint_motors, gait ([[action.legs]])
     [readings]                          # TaskConfig or agent fields (Robot.readings)
 
-Every error is one line, ``<mount file>: <field>: <what is wrong>`` (MountError).
+Every error is one line, ``<mount file>: <field>: <what is wrong>``: a MountError when the
+mount is read or its file edited, a models.ContractError (its `field`) when the robot is
+refused at load (tasks.load); the mount file's full path, and where a value is wrong for
+this robot, the one that fits (tasks.mount.spec.fitting_joints).
 
 The package: `fields` (the one-line checks), `records` (Mount, Bumper, Beams, the Action
 base), `kinds` (one Action class per action kind, registered by name: its fields, its

@@ -189,6 +189,9 @@ class Wheels(Action):
     kv: float = 0.05
     force: float = 0.12
 
+    def on_floor(self, spec):
+        return True
+
     @classmethod
     def parse(cls, fields, table, drive):
         joints = _wheel_joints(fields, table)
@@ -223,6 +226,9 @@ class WheelMotors(Action):
     motors: tuple[str, ...] = ()    # the file's motors that turn them
     kp: float = 0.0                 # the PD gains on the wheel angles: N m/rad, N m s/rad
     kv: float = 0.0
+
+    def on_floor(self, spec):
+        return True
 
     @classmethod
     def parse(cls, fields, table, drive):
@@ -298,6 +304,12 @@ class JointMotors(Action):
     turn: str = ""
     kp: float | None = None         # torque motors: N m/rad (PD); velocity servos: 1/s (P)
     kv: float | None = None         # torque motors: N m s/rad
+
+    def on_floor(self, spec):
+        """A forward joint that is a hinge rolls a wheel (or a ball) on the floor."""
+        import mujoco
+        joint = spec.joint(self.forward)
+        return joint is not None and joint.type == mujoco.mjtJoint.mjJNT_HINGE
 
     @classmethod
     def parse(cls, fields, table, drive):
@@ -381,6 +393,9 @@ class Gait(Action):
     #: The [action.gait] table: (parameter, value) pairs, sorted
     #: (tasks.realisations.gait.PARAMETERS).
     parameters: tuple[tuple[str, float], ...] = ()
+
+    def on_floor(self, spec):
+        return True
 
     @classmethod
     def parse(cls, fields, table, drive):

@@ -63,7 +63,7 @@ def resolve_file(text: str, where: str, mount_path: pathlib.Path) -> pathlib.Pat
 def parse(path: str | pathlib.Path) -> Mount:
     """The Mount of a mount file; MountError on any bad field (the file is not compiled
     here: `check` does that)."""
-    path = pathlib.Path(path)
+    path = pathlib.Path(path).resolve()   # every error names it so (FILE: FIELD: problem)
     data = read(path)
     fields = Fields(path)
     drive, model, joints = _parse_top(fields, data)
@@ -73,7 +73,7 @@ def parse(path: str | pathlib.Path) -> Mount:
     readings, check = _parse_tables(fields, data, drive)
     integrator = _parse_integrator(fields, data)
     text, ranged, names = fields.text, fields.ranged, fields.names
-    return Mount(path=path.resolve(), name=text(data, "name", "name", path.stem),
+    return Mount(path=path, name=text(data, "name", "name", path.stem),
                  file=data["file"], model=model, drive=drive,
                  unit=ranged(data, "unit", "unit", UNIT, 0.1), base=text(data, "base", "base"),
                  joints=joints, drop=names(data, "drop", "drop", DROPS),

@@ -75,6 +75,14 @@ class Action:
         joints, gains, legs...; tasks.realisations.Realisation.physics)."""
         return {}
 
+    def on_floor(self, spec) -> bool:
+        """Whether the kind moves the robot through its contact with the floor (wheels,
+        legs, a rolling joint): such a base needs a free joint, or, beside joints of its
+        own, slides x, y and z ("slides_z": it rests on the floor by gravity), where any
+        other is moved as a planar base (tasks.mount.spec names the joints that fit).
+        spec: the robot file's MjSpec."""
+        return False
+
     def check_task_config(self, config) -> None:
         """Refuses task readings (a tasks.TaskConfig) the kind cannot run: ValueError."""
 

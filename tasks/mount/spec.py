@@ -144,12 +144,51 @@ def _root_joints(mount, spec, base, frame):
         if mount.drive == "two_wheel":
             plain_joint(base, "yaw", mujoco.mjtJoint.mjJNT_HINGE, frame.world_axis(2))
     elif mount.joints == "free":
-        if list(base.joints):
-            fail(mount.path, "joints", f"body {mount.base!r} has joints of its own: joints = "
-                                       "\"file\", or \"slides\" to add slides beside them")
+        own = list(base.joints)
+        if any(j.type == mujoco.mjtJoint.mjJNT_FREE for j in own):
+            fail(mount.path, "joints", f"body {mount.base!r} has a free joint of its own: "
+                                       "joints = \"file\"")
+        if own:
+            fail(mount.path, "joints", f"body {mount.base!r} has joints of its own "
+                                       f"({_listed(own)}), so no free joint can be added: "
+                                       f"{fitting_joints(mount, spec, base)}")
         base.add_freejoint(name="root")
     elif mount.joints in ("slides", "slides_z"):
         _slides_beside(mount, spec, base, frame)
+    else:   # "file": the base's own must place it (tasks.placement.base_joints)
+        own = list(base.joints)
+        slides = [j for j in own if j.type == mujoco.mjtJoint.mjJNT_SLIDE]
+        if not any(j.type == mujoco.mjtJoint.mjJNT_FREE for j in own) and len(slides) < 2:
+            has = f"its own: {_listed(own)}" if own else "it has none"
+            fail(mount.path, "joints", f"body {mount.base!r} has no free joint and no slides "
+                                       f"along x and y to move it in the room ({has}): "
+                                       f"{fitting_joints(mount, spec, base)}")
+
+
+#: The joints value that fits a base, and what it does: with joints of its own, and
+#: (Action.on_floor) moved through the floor or not.
+FITTING = {(True, True): ("slides_z", "adds slides x, y and z beside them (a robot that rolls "
+                                      "or walks on the floor, resting on it by gravity)"),
+           (True, False): ("slides", "adds slides x and y beside them (the base held at its "
+                                     "height: a planar robot)"),
+           (False, True): ("free", "adds a free joint (a robot that stands on the floor)"),
+           (False, False): ("planar", "adds slides x and y (and a hinge about z): a planar "
+                                      "robot")}
+
+
+def fitting_joints(mount, spec, base):
+    """'joints = "VALUE" adds ...': the joints value that fits the base (FITTING), by its
+    own joints and whether the action moves it through the floor."""
+    value, does = FITTING[bool(list(base.joints)), mount.action.on_floor(spec)]
+    return f"joints = \"{value}\" {does}"
+
+
+def _listed(joints):
+    """The joints' names and types, as an error lists them."""
+    import mujoco
+    kinds = {mujoco.mjtJoint.mjJNT_HINGE: "a hinge", mujoco.mjtJoint.mjJNT_SLIDE: "a slide",
+             mujoco.mjtJoint.mjJNT_BALL: "a ball joint", mujoco.mjtJoint.mjJNT_FREE: "free"}
+    return ", ".join(f"{j.name!r}, {kinds[j.type]}" for j in joints)
 
 
 #: A joint's fields an MjSpec copy keeps (every field of MjsJoint but its identity).

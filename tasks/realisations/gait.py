@@ -114,7 +114,8 @@ class GaitPhysics(navigation.Physics):
         super()._reload_from_data(data)
         m = self.model
         if self._free is None:
-            raise navigation.ContractError("the gait drive needs a base on a free joint")
+            raise navigation.ContractError("the gait drive needs a base on a free joint",
+                                           field="joints")
         mjm = m.ptr
         self._listing(mjm)
         self._shares(mjm)
@@ -145,7 +146,7 @@ class GaitPhysics(navigation.Physics):
         their lengths at rest)."""
         from tasks.kernels.gait import HELD, LIFT, SWING
         if not self.legs:
-            raise navigation.ContractError("the gait drive needs legs listed")
+            raise navigation.ContractError("the gait drive needs legs listed", field="action.legs")
         names, leg, role = [], [], []
         for i, (swing, lifts, held) in enumerate(self.legs):
             for r, group in ((SWING, (swing,)), (LIFT, lifts), (HELD, held)):
@@ -157,7 +158,8 @@ class GaitPhysics(navigation.Physics):
             j = mujoco.mj_name2id(mjm, mujoco.mjtObj.mjOBJ_JOINT, navigation.PREFIX + name)
             if j < 0 or int(mjm.jnt_type[j]) not in (int(mujoco.mjtJoint.mjJNT_HINGE),
                                                      int(mujoco.mjtJoint.mjJNT_SLIDE)):
-                raise navigation.ContractError(f"the gait drive needs a hinge or slide {name!r}")
+                raise navigation.ContractError(f"the gait drive needs a hinge or slide {name!r}",
+                                               field="action.legs")
             joints.append(j)
         self._joints = np.array(joints, dtype=np.int64)
         self._leg = np.array(leg, dtype=np.int64)
@@ -173,7 +175,7 @@ class GaitPhysics(navigation.Physics):
             raise navigation.ContractError(
                 f"the gait drive needs the listed joints moved by torque motors or position "
                 f"servos; actuator {mujoco.mj_id2name(mjm, mujoco.mjtObj.mjOBJ_ACTUATOR, other)!r} "
-                f"is neither: {model_why_other(mjm, other)}: {OTHER_ADVICE}")
+                f"is neither: {model_why_other(mjm, other)}: {OTHER_ADVICE}", field="action.legs")
         lo, hi = control_ranges(mjm, np.arange(mjm.nu))
         if all(model_kind(mjm, a) == "torque motors" and int(mjm.actuator_trntype[a]) == int(
                 mujoco.mjtTrn.mjTRN_JOINT) for a in movers):
@@ -182,7 +184,8 @@ class GaitPhysics(navigation.Physics):
                 acts[list(self._joints).index(mjm.actuator_trnid[a, 0])] = a
             missing = [names[c] for c in range(len(joints)) if acts[c] < 0 and role[c] != HELD]
             if missing:
-                raise navigation.ContractError(f"the gait drive needs a motor on joint {missing[0]!r}")
+                raise navigation.ContractError(
+                    f"the gait drive needs a motor on joint {missing[0]!r}", field="action.legs")
             self._acts = acts
             self._servos = np.zeros(0, dtype=np.int64)
             # a motor's force per unit control on its joint: gear times gain
@@ -195,7 +198,7 @@ class GaitPhysics(navigation.Physics):
         else:
             raise navigation.ContractError(
                 "the gait drive needs the listed joints moved by torque motors on them "
-                "or by position servos, not a mix")
+                "or by position servos, not a mix", field="action.legs")
         self._ctrl_lo = np.where(self._acts >= 0, lo[self._acts], 0.0)
         self._ctrl_hi = np.where(self._acts >= 0, hi[self._acts], 0.0)
         self._servo_gain = gain[self._servos].copy()

@@ -24,7 +24,7 @@ class ServosPhysics(navigation.Physics):
         ids = {name: navigation.named_id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, name)
                for name in ("forward", "turn", "grip")}
         if ids["forward"] < 0 or ids["turn"] < 0:
-            raise navigation.ContractError(MISSING_ACTUATORS)
+            raise navigation.ContractError(MISSING_ACTUATORS, field="action")
         # the turn servo's sense: a servo on the yaw hinge turns the base by its gear's
         # sign times the hinge's (1 about z, -1 about -z)
         turn_sign = 1.0
@@ -38,7 +38,8 @@ class ServosPhysics(navigation.Physics):
         # inertia the turn.
         if "yaw" not in self.base_joints:
             raise navigation.ContractError("a planar two_wheel base needs a hinge about z (a "
-                                           "mount's joints = \"planar\" adds one)")
+                                           "mount's joints = \"planar\" adds one)",
+                                           field="joints")
         dof = {role: m.jnt_dofadr[j] for role, j in self.base_joints.items()}
         mass = 1.0 / m.dof_invweight0[dof["x"]]
         yaw_inertia = 1.0 / m.dof_invweight0[dof["yaw"]]

@@ -28,10 +28,11 @@ class ThrustersPhysics(navigation.Physics):
         thrust_y = navigation.named_id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, "thrust_y")
         if thrust_x < 0 or thrust_y < 0:
             raise navigation.ContractError("the floating drive needs actuators 'thrust_x' "
-                                           "and 'thrust_y'")
+                                           "and 'thrust_y'", field="action")
         if self.n_beams != 8:
             raise navigation.ContractError(
-                "the floating drive needs 8 rangefinders (E, NE, N, NW, W, SW, S, SE; eq 10)")
+                "the floating drive needs 8 rangefinders (E, NE, N, NW, W, SW, S, SE; eq 10)",
+                field="beams")
         self._mass = float(m.body_subtreemass[self._base])
         if self._free is not None:  # a free joint's dofs start with x, y
             dof_x, dof_y = self.free_dof, self.free_dof + 1
@@ -39,7 +40,8 @@ class ThrustersPhysics(navigation.Physics):
             if (self._joints.x_sign, self._joints.y_sign) != (1.0, 1.0):
                 raise navigation.ContractError(
                     "the floating drive pushes slides along x and y; the base's run along -x "
-                    "or -y (a mount's joints = \"planar\" adds slides along x and y)")
+                    "or -y (a mount's joints = \"planar\" adds slides along x and y)",
+                    field="joints")
             dof_x = m.jnt_dofadr[self.base_joints["x"]]
             dof_y = m.jnt_dofadr[self.base_joints["y"]]
         #: The bumper geom's id (the bump readings' coast watches its contacts).

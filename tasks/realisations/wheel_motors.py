@@ -28,7 +28,8 @@ class WheelMotorsPhysics(Planned):
         if min(joints) < 0 or min(motors) < 0:
             raise navigation.ContractError(
                 "wheel motors need hinges 'left' and 'right' and the motors "
-                + ", ".join(repr(MOTOR_ROLE.format(k)) for k in range(self.motor_count)))
+                + ", ".join(repr(MOTOR_ROLE.format(k)) for k in range(self.motor_count)),
+                field="action")
         #: Wheel radius (m) and half the track, the wheels' distance apart / 2 (m).
         self.wheel_radius, self.half_track = wheel_geometry(mjm, joints)
         self.parts.update(wheel_radius=self.wheel_radius, half_track=self.half_track,

@@ -40,10 +40,10 @@ class Planned(Ramped):
     kp = 0.0
     kv = 0.0
 
-    def plan_parts(self, joints, motors, kind, what):
+    def plan_parts(self, joints, motors, kind, field):
         """The plan's fields for the two joints (ids) moved by the actuators `motors` (ids)
-        of one kind (tasks.actuators.KINDS); `what` names the robot's part in the
-        refusal of motors that cannot move the joints apart."""
+        of one kind (tasks.actuators.KINDS); `field`: the mount's field the refusal of
+        motors that cannot move the joints apart names."""
         mjm = self.model.ptr
         q = mjm.jnt_qposadr[joints].astype(np.int64)
         dof = mjm.jnt_dofadr[joints].astype(np.int64)
@@ -54,7 +54,7 @@ class Planned(Ramped):
                   else np.zeros((len(motors), 2)))
         mtm = gram(forces)
         if mode == TORQUE:
-            require_independent(forces, mtm, what)
+            require_independent(forces, mtm, field)
         ctrl_lo, ctrl_hi = control_ranges(mjm, motors)
         #: The plan's joints' qpos addresses, its state: the targets and the ramp's
         #: substeps left.
@@ -85,7 +85,7 @@ class WheelsPhysics(Ramped):
         ids = [navigation.named_id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, name)
                for name in ("left_wheel", "right_wheel")]
         if min(ids) < 0:
-            raise navigation.ContractError(MISSING_ACTUATORS)
+            raise navigation.ContractError(MISSING_ACTUATORS, field="action")
         joints = [int(m.actuator_trnid[i, 0]) for i in ids]
         #: Wheel radius (m) and half the track, the wheels' distance apart / 2 (m).
         self.wheel_radius, self.half_track = wheel_geometry(m, joints)
