@@ -88,10 +88,32 @@ Section 4's other learners, behind the same interface (ebrl.baselines, tested in
 tests/test_baselines.py; baselines.AGENTS names them): QTable, tabular Q-learning with
 roulette-wheel selection, whose confidence is the variance of its action probabilities;
 MFEC, model-free episodic control, trusted where its nearest neighbours are near.
+
+This package's own import is light (numpy at most): `Config`, `paper_config` and
+`similarity` are imported with it; `Agent` and the modules `intrinsic`, `baselines` and
+`behaviour`, which compile with numba, at their first use (module __getattr__), so the
+registries (ebrl.readings, ebrl.config) import without numba.
 """
-from ebrl import baselines, behaviour, intrinsic
-from ebrl.agent import Agent
+import importlib
+
 from ebrl.config import Config, paper_config
 from ebrl.similarity import similarity
 
+#: The names imported at their first use: {name: (module, attribute or None for the module)}.
+_COMPILED = {"Agent": ("ebrl.agent", "Agent"), "intrinsic": ("ebrl.intrinsic", None),
+             "baselines": ("ebrl.baselines", None), "behaviour": ("ebrl.behaviour", None)}
+
 __all__ = ["Agent", "Config", "paper_config", "similarity", "intrinsic", "baselines", "behaviour"]
+
+
+def __getattr__(name):
+    """Agent and the numba modules (see the module): imported here at their first use."""
+    if name not in _COMPILED:
+        raise AttributeError(f"module 'ebrl' has no attribute {name!r}")
+    module, attribute = _COMPILED[name]
+    found = importlib.import_module(module)
+    return getattr(found, attribute) if attribute else found
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_COMPILED))

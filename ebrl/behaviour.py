@@ -44,7 +44,7 @@ import pathlib
 import numpy as np
 
 from ebrl import intrinsic
-from ebrl.config import Config, READINGS
+from ebrl.config import CONDITIONS, Config, READINGS
 
 #: The beams of eq 10, counter-clockwise from East (the floating robot's order).
 EQ10_BEAMS = ("E", "NE", "N", "NW", "W", "SW", "S", "SE")
@@ -213,7 +213,7 @@ def fallback(genome, condition, random_in_avoidance=READINGS["random_in_avoidanc
                                       random_demand=random_demand)
     if condition != "avoidance":
         raise ValueError(f"unknown condition {condition!r}; valid: "
-                         f"{', '.join(intrinsic.CONDITIONS)}")
+                         f"{', '.join(CONDITIONS)}")
     dim = intrinsic.BEHAVIOURS[genome.behaviour][1]
     return intrinsic.Intrinsic(genome.avoid, dim, genome.random_rate, genome.random_sd,
                                random_in_avoidance=random_in_avoidance, hold=hold != 0.0,

@@ -3,6 +3,10 @@ import dataclasses
 
 from ebrl import readings
 
+#: Section 3.6's two conditions: the fallback acts at random, or by the intrinsic
+#: behaviour (ebrl.intrinsic.fallback_for builds either).
+CONDITIONS = ("random", "avoidance")
+
 #: Table 1's memory size by column: (T) two wheels robot, (F) floating robot.
 TABLE1_MEMORY = {"T": 1024, "F": 4096}
 

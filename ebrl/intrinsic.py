@@ -20,7 +20,7 @@ from numba import njit, types
 
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl import records
-from ebrl.config import READINGS, check_reading
+from ebrl.config import CONDITIONS, READINGS, check_reading
 from ebrl.kernels import INTRINSIC, RANDOM, clip_unit
 
 THETA = 0.25  # eq 9's sensitivity threshold for the floating robot
@@ -323,7 +323,6 @@ class Intrinsic(_Fallback):
 
 #: Section 3.4's intrinsic behaviours by equation: (behaviour, action dimension).
 BEHAVIOURS = {"eq8": (avoid_by_turning, 1), "eq9-10": (avoid_by_accelerating, 2)}
-CONDITIONS = ("random", "avoidance")
 
 
 #: The behaviours with eq 9's dead zone, where eq9_dead_zone applies.

@@ -4,7 +4,7 @@ The paper's "two wheels robot" is the two_wheel drive, its "floating robot" the
 floating drive: every registered robot is compared with the figures of its drive.
 The step budgets live with the drives, in tasks/robots.py.
 """
-from ebrl.intrinsic import CONDITIONS  # noqa: F401  (the paper's two conditions)
+from ebrl.config import CONDITIONS  # noqa: F401  (the paper's two conditions)
 
 SEEDS = 50
 

@@ -9,7 +9,7 @@ top-level bodies enter the room's world body directly, so a free joint is allowe
 A new robot is a new XML file (here, or anywhere: see docs/adding_a_robot.md).
 
 Importing this package imports nothing heavy and changes nothing: MuJoCo is imported
-where a function needs it (tasks imports it first, with rendering off: tasks.gl).
+where a function needs it (tasks imports it first, with rendering off: tasks.simulator).
 
 Contact bits, one per role (contype / conaffinity):
   walls and obstacles 1 / 1; robot bumpers 2 / 1 (they touch walls, never the floor);

@@ -17,6 +17,7 @@ Nothing heavy is imported at the top: the mount parser uses this module before M
 needed, and the kernels read KINDS.
 """
 import numpy as np
+from models import ContractError
 
 #: The actuators' kinds a controller knows, as the docs and errors write them (their
 #: index is the joint_motors controller's code: tasks.kernels.joint_motors).
@@ -179,7 +180,6 @@ def require_independent(forces, mtm, field):
     """models.ContractError naming the mount's `field` when the motors, of forces `forces` on two joints
     and Gram matrix mtm (a, b, e, det: tasks.kernels.plan.gram), cannot move the two
     joints apart: the determinant 0, to rounding."""
-    from models import ContractError
     a, _, e, det = mtm
     if abs(det) <= 1e-12 * max(1e-300, a + e) ** 2:
         raise ContractError("the motors do not move the two joints independently (force per "

@@ -20,11 +20,11 @@ Distances and heights are in paper units (models.unit_of).
 """
 from typing import NamedTuple
 
-import mujoco
 import numpy as np
 
 from models import PREFIX, ContractError, unit_of
 from tasks import navigation
+from tasks.simulator import mujoco
 
 
 class Hit(NamedTuple):

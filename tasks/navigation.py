@@ -13,18 +13,18 @@ joints work alike. The rest of the naming contract is in docs/adding_a_robot.md.
 import collections
 import math
 
-import mujoco
 import numpy as np
-from dm_control import mujoco as dm_mujoco
 from dm_control.rl import control
 from dm_env import specs
 
 from models import FRAME_SITE, NAMES_TEXT, PREFIX, UNIT, UNIT_NUMERIC, ContractError, \
     contract_names, rest_qpos, room_layout, unit_of
 from tasks import placement
+from tasks import render
 from tasks.config import TaskConfig
 from tasks.kernels import bindings, body, sensing, steps
 from tasks.kernels.stream import TaskStream
+from tasks.simulator import dm_mujoco, mujoco
 
 # Section 3.1: the start pose is the room's "start" site (5 units from the left edge,
 # 25 below the top edge, heading right). The jitter, the sensors' range and noise and
@@ -250,7 +250,6 @@ class Physics(dm_mujoco.Physics):
                scene_callback=None):
         """A frame, as dm_control's render, through tasks.render: the OpenGL context is
         made at the first frame, never at import."""
-        from tasks import render
         return render.frame(self, height, width, camera_id, scene_option=scene_option,
                             scene_callback=scene_callback)
 

@@ -16,11 +16,11 @@ its pose set from its rest, and the start checked at load.
 import math
 from typing import NamedTuple
 
-import mujoco
 import numpy as np
 
 from models import ContractError
 from tasks.mount.frame import rest_data
+from tasks.simulator import mujoco
 
 #: How far (units) the robot placed at the start may stand from it, and (rad) face away
 #: from its heading, before the load refuses it (the placement is exact but for

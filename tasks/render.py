@@ -13,8 +13,9 @@ import ctypes.util
 import os
 import weakref
 
-import mujoco
 import numpy as np
+
+from tasks.simulator import mujoco
 
 #: The MUJOCO_GL values a frame can be rendered with.
 BACKENDS = ("egl", "osmesa", "glfw")

@@ -17,6 +17,7 @@ import pathlib
 from typing import TYPE_CHECKING
 
 from models import MODEL_DIR, UNIT
+from tasks.config import TaskConfig
 from tasks.protocols import PROTOCOLS
 
 if TYPE_CHECKING:
@@ -99,12 +100,10 @@ class Robot:
 
     def task_config(self, **overrides):
         """tasks.TaskConfig with this robot's task readings, then the overrides."""
-        from tasks.config import TaskConfig
         return TaskConfig(**(self.task_readings() | overrides))
 
     def task_readings(self):
         """{TaskConfig field: value} of this robot's readings."""
-        from tasks.config import TaskConfig
         fields = {f.name for f in dataclasses.fields(TaskConfig)}
         return {k: v for k, v in self.readings if k in fields}
 

@@ -12,11 +12,11 @@ once; a realisation says how a body turns and moves (tasks.realisations: servos,
 wheel_motors, joint_motors, gait). This module is the family's task: its constants, the
 geom pairs a move watches (`touch_pairs`) and each episode's settings.
 """
-import mujoco
 import numpy as np
 
 from tasks import navigation
 from tasks.readings import BY_NAME
+from tasks.simulator import mujoco
 
 MAX_TURN = 1.0  # rad per step
 MAX_MOVE = 2.0  # units per step

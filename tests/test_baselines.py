@@ -313,7 +313,7 @@ def corridor(name, seed, trials, **overrides):
     """A corridor of N cells; reward at the right end. The readings name the cell (one-hot
     plus noise, clipped to [0, 1]); action > 0 moves right. exploration_rate=1 never
     lets the learner act: the random walk (about (N-1)^2 = 81 steps a trial)."""
-    config_class, agent_class = AGENTS[name]
+    config_class, agent_class = AGENTS[name].config, AGENTS[name].agent
     rng = np.random.default_rng(seed + 100)
     ag = agent_class(config_class(**overrides), N, 1, intrinsic.RandomWalk(1), seed=seed)
     lengths, actions = [], []
@@ -356,7 +356,7 @@ def test_same_seed_same_actions(name):
 def test_same_seed_same_actions_floating_like(name):
     """10 inputs in eq 3's groups, 2-D actions, the eq 9-10 avoidance fallback."""
     def run(seed):
-        config_class, agent_class = AGENTS[name]
+        config_class, agent_class = AGENTS[name].config, AGENTS[name].agent
         ag = agent_class(config_class(), 10, 2, intrinsic.fallback_for("eq9-10", "avoidance"),
                          seed=seed, **FLOATING)
         rng = np.random.default_rng(11)
@@ -377,7 +377,7 @@ def test_configs_are_numbers_for_set(name):
     """Every field is an int or a float with a default, as `--set NAME=VALUE` needs, or
     one of the fallback's switches (ebrl.config.READINGS, a string as in ebrl.Config)."""
     from ebrl.config import READINGS
-    config_class, _ = AGENTS[name]
+    config_class = AGENTS[name].config
     default = config_class()
     for f in dataclasses.fields(config_class):
         v = getattr(default, f.name)
@@ -421,7 +421,7 @@ def test_a_baseline_runs_the_drives_intrinsic_behaviour(name):
     ("mfec", "action_levels", 0), ("mfec", "random_sd", float("nan")),
 ])
 def test_bad_config_names_the_field(name, field, value):
-    config_class, _ = AGENTS[name]
+    config_class = AGENTS[name].config
     with pytest.raises(ValueError, match=field) as err:
         config_class(**{field: value})
     assert "\n" not in str(err.value)
@@ -429,7 +429,7 @@ def test_bad_config_names_the_field(name, field, value):
 
 @pytest.mark.parametrize("name", ["qtable", "mfec"])
 def test_bad_inputs_raise(name):
-    config_class, agent_class = AGENTS[name]
+    config_class, agent_class = AGENTS[name].config, AGENTS[name].agent
     with pytest.raises(ValueError, match="config"):
         agent_class(QTableConfig() if name == "mfec" else MFECConfig(), 7, 1, Constant(0.0))
     with pytest.raises(ValueError, match="group"):

@@ -9,6 +9,8 @@ import textwrap
 
 import pytest
 
+from experiments.running.learners import AGENTS
+
 #: The slow tier (pyproject.toml's markers): fresh processes compiling and loading numba's cache.
 pytestmark = pytest.mark.slow
 
@@ -239,12 +241,11 @@ def test_the_warm_up_reaches_every_realisation_and_learner():
     compiles what another is compiling; one realisation's runs in one process. joint_motors
     is no shipped file's: its tests mount their own."""
     from experiments.checks import warm
-    from experiments.running import execution
     from tasks.realisations import REALISATIONS
     from tasks.robots import resolve
     groups = warm.specs()
     assert all(len({resolve(s.robot).realisation for s, _ in group}) == 1 for group in groups)
     pairs = [pair for group in groups for pair in group]
     assert set(REALISATIONS) - {resolve(s.robot).realisation for s, _ in pairs} == {"joint_motors"}
-    assert {s.agent for s, _ in pairs} == set(execution.AGENTS)
+    assert {s.agent for s, _ in pairs} == set(AGENTS)
     assert {fused for _, fused in pairs} == {True, False}

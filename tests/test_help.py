@@ -10,7 +10,7 @@ import pytest
 
 from experiments import cli
 from experiments.commands import arguments
-from ebrl.intrinsic import CONDITIONS
+from ebrl.config import CONDITIONS
 from helpers import ebrl, ebrl_here
 from tasks.robots import MOUNTS, ROBOTS
 

@@ -106,12 +106,12 @@ def test_the_configs_views_are_the_registrys_values_in_order():
 
 @pytest.mark.parametrize("name", ["qtable", "mfec"])
 def test_every_learner_carries_the_fallbacks_readings_with_their_defaults(name):
-    config = AGENTS[name][0]()
+    config = AGENTS[name].config()
     for r in agent_registry.AGENT:
         if r.fallback:
             assert getattr(config, r.name) == r.default
     with pytest.raises(ValueError, match="eq9_dead_zone must be one of zero, keep"):
-        AGENTS[name][0](eq9_dead_zone="sideways")
+        AGENTS[name].config(eq9_dead_zone="sideways")
 
 
 @pytest.mark.parametrize("reading", registry.EVERY, ids=lambda r: r.name)

@@ -31,13 +31,49 @@ scaled to unit length (d = 2: zero and the 8 compass directions, counter-clockwi
 +x). docs/interpretation.md ("Other learners") gives every choice and its reason.
 
 Neither imports a simulator; everything is derived from obs_dim, action_dim and groups.
-``AGENTS`` names them for the command line: ``AGENTS[name] = (ConfigClass, AgentClass)``.
+``AGENTS`` names them for the command line: ``AGENTS[name]`` is a ``Learner``, its config
+class and its agent class. The package imports no numba: the configs live in
+ebrl.baselines.configs, and MFEC (compiled) is imported at its first use.
 """
+import dataclasses
+import importlib
+
 from ebrl.baselines.common import discrete_actions, nearest_action
-from ebrl.baselines.mfec import MFEC, MFECConfig, discounted_returns
-from ebrl.baselines.qtable import QTable, QTableConfig, boltzmann, confidence
+from ebrl.baselines.configs import MFECConfig, QTableConfig
+from ebrl.baselines.qtable import QTable, boltzmann, confidence
 
-__all__ = ["QTableConfig", "QTable", "MFECConfig", "MFEC", "AGENTS", "discrete_actions",
-           "nearest_action", "boltzmann", "confidence", "discounted_returns"]
+__all__ = ["QTableConfig", "QTable", "MFECConfig", "MFEC", "AGENTS", "Learner",
+           "discrete_actions", "nearest_action", "boltzmann", "confidence", "discounted_returns"]
 
-AGENTS = {"qtable": (QTableConfig, QTable), "mfec": (MFECConfig, MFEC)}
+#: The names ebrl.baselines.mfec defines, imported (with numba) at their first use.
+_MFEC = ("MFEC", "discounted_returns")
+
+
+@dataclasses.dataclass(frozen=True)
+class Learner:
+    """A learner the command line knows: its config class, and its agent class as
+    "module:Class", imported at its first use (`agent`), so that the argument checks,
+    which need only the config, import no numba."""
+    config: type
+    agent_path: str
+
+    @property
+    def agent(self) -> type:
+        """The agent class (importing its module)."""
+        module, name = self.agent_path.split(":")
+        return getattr(importlib.import_module(module), name)
+
+
+AGENTS = {"qtable": Learner(QTableConfig, "ebrl.baselines.qtable:QTable"),
+          "mfec": Learner(MFECConfig, "ebrl.baselines.mfec:MFEC")}
+
+
+def __getattr__(name):
+    """MFEC and discounted_returns (ebrl.baselines.mfec, compiled): imported at first use."""
+    if name in _MFEC:
+        return getattr(importlib.import_module("ebrl.baselines.mfec"), name)
+    raise AttributeError(f"module 'ebrl.baselines' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_MFEC))

@@ -1,35 +1,13 @@
 """MFEC ("mfec"): model-free episodic control (Blundell et al. 2016), its k-NN estimates
 and trial returns compiled (ebrl.baselines' docstring)."""
-import dataclasses
 import math
 
 import numpy as np
 from numba import njit
 
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
-from ebrl.baselines.common import _Base, _check_finite, _check_int, _check_shared, \
-    _Fallback, _is_number, action_count
-
-
-@dataclasses.dataclass(frozen=True)
-class MFECConfig(_Fallback):
-    memory_size: int = 1024        # entries per discrete action (least recently used go)
-    neighbours: int = 11           # k of the k-NN estimate, as Blundell et al.
-    discount: float = 0.99         # gamma of the trial's returns, as Table 1's
-    distance_threshold: float = 0.2  # the memory acts when the mean k-NN distance <= this
-    value_threshold: float = 0.0   # ... and the chosen action's estimate exceeds this
-    exploration_rate: float = 0.05  # the fallback acts anyway, as Table 1's
-    action_levels: int = 5         # discrete actions for action_dim 1
-
-    def __post_init__(self):
-        _check_int(self, "memory_size", 1)
-        _check_int(self, "neighbours", 1)
-        v = self.distance_threshold
-        if not (_is_number(v) and v >= 0):
-            raise ValueError(f"distance_threshold must be a non-negative finite number, "
-                             f"got {v!r}")
-        _check_finite(self, "value_threshold")
-        _check_shared(self)
+from ebrl.baselines.common import _Base, action_count
+from ebrl.baselines.configs import MFECConfig
 
 
 def memory_bytes(config, obs_dim, action_dim, steps):

@@ -14,16 +14,17 @@ Everything runs with MuJoCo's stage timers off, as a run does (tasks.kernels.bin
 import statistics
 import time
 
-import mujoco
-
+import tasks
 from ebrl.benchmark import reference_pass
 from experiments.running import execution
+from tasks.kernels.bindings import stage_timers_off
+from tasks.robots import ROBOTS
+from tasks.simulator import mujoco
 
 
 def measure(robot, steps, blocks=5, room=None, drive=None):
     """Medians over `blocks` blocks of `steps` timed steps each (this machine's timings
     vary by about 10% from one moment to the next; the median of blocks much less)."""
-    import tasks
     spec = execution.RunSpec(robot, "avoidance", 0, steps, drive=drive, room=room)
     env = tasks.load(spec.entry, seed=0, room=spec.room)
     agent = execution.make_agent(spec, env)
@@ -89,8 +90,6 @@ def measure(robot, steps, blocks=5, room=None, drive=None):
 
 
 def main(steps=2000, blocks=5, robots=None, room=None, drive=None):
-    from tasks.kernels.bindings import stage_timers_off
-    from tasks.robots import ROBOTS
     with stage_timers_off():  # as `ebrl run` steps (execution.execute), raw physics too
         rows = [measure(robot, steps, blocks, room, drive)
                 for robot in (robots or tuple(ROBOTS))]

@@ -16,6 +16,9 @@ import math
 import time
 
 import numpy as np
+import models
+import tasks
+from models import rooms
 
 #: A robot may sink into a wall by this share of its radius at a fast contact, no more:
 #: its centre stays out of every obstacle with half its body to spare. The floating
@@ -49,7 +52,6 @@ def open_spot(layout):
 
 
 def _quiet(robot, drive, room=None):
-    import tasks
     env = tasks.load(robot, drive=drive, seed=0, sensor_noise=0.0, action_noise=0.0,
                      start_jitter=False, room=room)
     env.reset()
@@ -74,8 +76,6 @@ def free_space(robot, actions=1000, seed=0, drive=None, room=None):
     each action, for every beam; and the errors signed by their commands (> 0: the turn,
     move or velocity change went past the command; < 0: it fell short), which tell a
     drive too weak or too slow from one too strong (its gains, its time_scale)."""
-    import models
-    import tasks
     from tasks import beams, floating, two_wheel
     entry = tasks.resolve(robot, drive)
     env = _quiet(entry, None, room)
@@ -136,8 +136,6 @@ def way(signed):
 def beam_heights(robot, drive=None, room=None):
     """Each beam's tasks.beams.Height at the start (units above the floor, where it leaves
     the robot and at the end of its range), and the walls' height (units)."""
-    import tasks
-    from models import rooms
     from tasks import beams
     entry = tasks.resolve(robot, drive)
     env = _quiet(entry, None, room)
@@ -186,8 +184,6 @@ def fuzz(robot, actions=100_000, seed=0, drive=None, room=None):
     new episode, for a robot whose [check] allows any (a gait's), else the error
     propagates."""
     from dm_control.rl import control
-    import models
-    import tasks
     entry = tasks.resolve(robot, drive)
     env = tasks.load(entry, seed=seed, room=room)
     physics = env.physics
@@ -230,7 +226,6 @@ def fuzz(robot, actions=100_000, seed=0, drive=None, room=None):
 
 def main(robots, actions, accuracy_actions, drive=None, room=None):
     """Prints both checks for each robot; returns 0 if every robot passes, else 1."""
-    import tasks
     from tasks import navigation
     failed = 0
     for robot in robots:

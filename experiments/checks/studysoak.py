@@ -23,6 +23,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from experiments.checks import pgserver
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
@@ -88,7 +89,6 @@ def main(argv=None):
     args = p.parse_args(argv)
     import contextlib
 
-    from experiments.checks import pgserver
     with contextlib.ExitStack() as stack:
         url = args.storage
         if url is None:

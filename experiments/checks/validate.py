@@ -4,10 +4,17 @@ written. Each check returns the value or raises ValueError with that line.
 
 The limits below are documented in the README and in `ebrl run --help`.
 """
+import dataclasses
+import importlib
 import math
 import os
 import pathlib
 import tempfile
+import types
+
+import tasks
+from experiments.running import execution, learners
+from tasks.config import TaskConfig
 
 #: Seeds run from 0 to MAX_SEED, and one command takes at most MAX_SEEDS of them.
 MAX_SEED = 999_999
@@ -142,8 +149,6 @@ _SIZED = {"qtable": ("ebrl.baselines.qtable", {"action_levels": 2}),
 def _largest(estimate, config, name, low, given, available):
     """The largest value of the size `name` from low to given whose estimate fits in
     available bytes (None when not even low does), the other fields as config's."""
-    import dataclasses
-    import types
     fields = dataclasses.asdict(config)
 
     def fits(v):
@@ -170,7 +175,6 @@ def memory_fits(agent, config, dims, steps, overrides, robot, available=None):
     available = available_memory() if available is None else available
     if available is None:
         return
-    import importlib
     bytes_of = importlib.import_module(module).memory_bytes
 
     def estimate(c):
@@ -196,15 +200,11 @@ def agent_configs(robots, overrides, drive=None, agent="ebrl", steps=None):
     """Builds each robot's agent config and task config with the overrides once, here,
     as a run would (execution.RunSpec), so that a name the chosen learner and the task do
     not have, or a value their configs refuse, stops the command before any run."""
-    import dataclasses
-
-    from experiments.running import execution
-    from tasks.config import TaskConfig
     overrides = dict(overrides)
     size = overrides.get("memory_size")
     if size is not None and size > MAX_MEMORY_SIZE:
         raise ValueError(f"memory_size must be at most {MAX_MEMORY_SIZE:,}, got {size:,}")
-    config_cls, _ = execution.agent_classes(agent)
+    config_cls = learners.learner(agent).config
     known = {f.name for cls in (config_cls, TaskConfig) for f in dataclasses.fields(cls)}
     unknown = next((k for k in overrides if k not in known), None)
     if unknown is not None:
@@ -238,7 +238,6 @@ def agent_configs(robots, overrides, drive=None, agent="ebrl", steps=None):
 def _dims(spec):
     """(obs_dim, action_dim) of a run's agent: its modalities' sizes, its drive's action
     (the robot's task, loaded once here)."""
-    import tasks
     env = tasks.load(spec.entry, seed=0)
     try:
         obs = env.observation_spec()

@@ -6,6 +6,7 @@ import pathlib
 from experiments.checks import validate
 from experiments.commands import arguments
 from experiments.commands.common import check_agent, check_robots, fail, finish, selected_robots
+from experiments.running import results
 
 
 def add_parser(subparsers):
@@ -74,7 +75,6 @@ def run(args):
         readings, combos = _check(args)
     except (ValueError, argparse.ArgumentTypeError) as e:
         return fail(str(e))
-    from experiments.running import results
     from experiments.studies import ablation
     try:
         cell_runs, failed = ablation.run(args.out, selected_robots(args), args.seeds,

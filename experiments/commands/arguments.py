@@ -8,8 +8,12 @@ import os
 import pathlib
 import sys
 
+from ebrl.config import CONDITIONS
 from experiments.checks import validate
 from experiments.running import settings
+from models import rooms
+from tasks.protocols import PROTOCOL_VERSION, PROTOCOLS
+from tasks.robots import DRIVES, MOUNTS, PAPER_ROBOTS, ROBOTS
 
 
 def robot_list(text):
@@ -17,7 +21,6 @@ def robot_list(text):
     robots), "all" (every registered robot), or a path to a robot .xml file (with
     --drive), or a mount (a shipped mount's name, or a .toml file: tasks/mount/). The
     names come from the registry, tasks/robots.py."""
-    from tasks.robots import MOUNTS, PAPER_ROBOTS, ROBOTS
     if text == "paper":
         return PAPER_ROBOTS
     if text == "all":
@@ -45,7 +48,6 @@ def _one_robot(text):
 def robot_help(several, default, xml=True):
     """What --robot takes, as robot_list reads it: the registered robots, the shipped
     mounts, a mount file, (xml) a robot file with --drive and (several) lists."""
-    from tasks.robots import MOUNTS, ROBOTS
     takes = (f"a registered robot ({', '.join(ROBOTS)}), a shipped mount ({', '.join(MOUNTS)}; "
              "'ebrl robots' lists both), a mount file (.toml: docs/adding_a_robot.md)"
              + (" or a robot file of the naming contract (.xml, with --drive)" if xml else ""))
@@ -57,7 +59,6 @@ def robot_help(several, default, xml=True):
 
 def add_robots(parser, default, several=True):
     """--robot and --drive, from the registry; the help lists what --robot takes."""
-    from tasks.robots import DRIVES
     takes = robot_help(several, default)
     if several:
         parser.add_argument("--robot", type=robot_list, default=robot_list(default),
@@ -70,9 +71,8 @@ def add_robots(parser, default, several=True):
 
 
 def add_condition(parser, every=True, default="all", also=""):
-    """--condition: one of the paper's conditions (ebrl.intrinsic.CONDITIONS), or (every)
+    """--condition: one of the paper's conditions (ebrl.config.CONDITIONS), or (every)
     "all"; its help lists the values."""
-    from ebrl.intrinsic import CONDITIONS
     values = CONDITIONS + (("all",) if every else ())
     what = {"random": "the intrinsic behaviour a random walk",
             "avoidance": "the intrinsic behaviour Section 3.4's obstacle avoidance"}
@@ -140,7 +140,6 @@ def room(text):
     """--room: a shipped map's name ('ebrl rooms'), random:WxH:SEED or a map file, read
     and checked here (models.rooms.MapError: one line naming the file); the paper's
     `sutton` is None."""
-    from models import rooms
     try:
         rooms.load(text)
     except rooms.MapError as e:
@@ -149,7 +148,6 @@ def room(text):
 
 
 def add_room(parser):
-    from models import rooms
     parser.add_argument("--room", type=room, default=None, metavar="NAME|FILE",
                         help=f"the room: a shipped map ({', '.join(rooms.MAPS)}; 'ebrl rooms'), "
                              "random:WxH:SEED (a labmaze maze of W x H cells) or a map file "
@@ -166,7 +164,6 @@ def add_backend(parser):
 
 
 def add_protocol(parser):
-    from tasks.protocols import PROTOCOL_VERSION, PROTOCOLS
     parser.add_argument("--protocol", type=choice(PROTOCOLS), default="adopted",
                         help=f"the readings (tasks/protocols.py): adopted (protocol "
                              f"{PROTOCOL_VERSION}'s) or literal (the paper as written, "

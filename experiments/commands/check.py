@@ -1,6 +1,7 @@
 """`ebrl check`: a robot's action accuracy and a random-action fuzz
 (experiments.checks.robotcheck)."""
 from experiments.checks import validate
+from experiments.checks import robotcheck
 from experiments.commands import arguments
 from experiments.commands.common import check_robots, fail
 
@@ -21,6 +22,5 @@ def run(args):
         check_robots(args)
     except ValueError as e:
         return fail(str(e))
-    from experiments.checks import robotcheck
     return robotcheck.main(args.robot, args.actions, args.accuracy_actions, args.drive,
                            args.room)

@@ -5,8 +5,12 @@ file, the backend, a study's storage), the runs a command plans, and its last li
 import pathlib
 import sys
 
+import tasks
 from experiments import paper
 from experiments.checks import validate
+from experiments.running import results, runner
+from experiments.studies import study
+from tasks.robots import ROBOTS, resolve
 
 USAGE_ERROR = 2
 RUNS_FAILED = 1
@@ -27,7 +31,6 @@ def check_robots(args):
     (the naming contract, docs/adding_a_robot.md) is one line before any run; in a room
     other than the paper's (--room), every robot is composed into it, so a corridor
     narrower than a robot is one line too (models.rooms.check_fits)."""
-    from tasks.robots import ROBOTS, resolve
     room = getattr(args, "room", None)
     for robot in selected_robots(args):
         resolve(robot, args.drive)
@@ -46,8 +49,6 @@ def check_room(robots, room, drive=None, overrides=()):
         return
     import dataclasses
 
-    import tasks
-    from tasks.robots import resolve
     fields = {f.name for f in dataclasses.fields(tasks.TaskConfig)}
     task = {k: v for k, v in overrides if k in fields}
     for robot in robots:
@@ -85,7 +86,6 @@ def check_backend(backend):
 
 def _storage_url(args):
     """--storage as an Optuna URL (checked: a writable SQLite file's folder, or a URL)."""
-    from experiments.studies import study
     url = study.storage_url(args.storage, args.out)
     if args.storage is None:
         pass  # OUT/study.db: --out is checked by the caller
@@ -134,8 +134,6 @@ def open_study(args, url, load):
     """The study load() opens, with --out made first: (study, None); or, when the storage
     cannot be opened, (None, the exit status of its one line) with what this call made
     (--out, a new database file and its lock) removed again: a refusal writes nothing."""
-    from experiments.running import results
-    from experiments.studies import study
     made = [p for p in (args.out, *_storage_files(url)) if not p.exists()]
     args.out.mkdir(parents=True, exist_ok=True)
     try:
@@ -159,7 +157,6 @@ def study_storage(args):
 
 def plan(args, overrides=()):
     """The specs that --robot, --condition, --seeds and --steps select."""
-    from experiments.running import runner
     conditions = paper.CONDITIONS if args.condition == "all" else (args.condition,)
     return runner.plan(selected_robots(args), conditions, args.seeds, args.steps, overrides,
                        args.drive, getattr(args, "agent", "ebrl"),
@@ -191,7 +188,6 @@ def run_summary(ran, path):
     if not ran.failed:
         print(line)
         return 0
-    from experiments.running import results
     return fail(f"{failed_line([(s.name, e) for s, e in ran.failed])}; recorded in "
                 f"run.json, not averaged; {line}; {results.advice(e for _, e in ran.failed)}",
                 RUNS_FAILED)

@@ -6,6 +6,9 @@ from experiments import paper
 from experiments.checks import validate
 from experiments.commands import arguments
 from experiments.commands.common import fail, report_if_any, run_summary
+from experiments.outputs import rendering
+from experiments.running import execution, results, runner
+from tasks.robots import PAPER_ROBOTS, ROBOTS
 
 SEEDS = 6
 VIDEO_STEPS = 3_000
@@ -23,9 +26,6 @@ def run(args):
         validate.output_folder(args.out, "--out")
     except ValueError as e:
         return fail(str(e))
-    from experiments.outputs import rendering
-    from experiments.running import execution, results, runner
-    from tasks.robots import PAPER_ROBOTS, ROBOTS
     budgets = {r: max(10_000, ROBOTS[r].budget // 5) for r in PAPER_ROBOTS}
     specs = runner.plan(PAPER_ROBOTS, paper.CONDITIONS, range(SEEDS), budgets)
     print(f"demo: {len(specs)} runs ({SEEDS} seeds x 2 robots x 2 conditions), budgets "

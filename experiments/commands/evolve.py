@@ -5,6 +5,9 @@ import pathlib
 from experiments.checks import validate
 from experiments.commands import arguments
 from experiments.commands.common import check_robots, fail, finish, open_study, study_storage
+from experiments.running import execution, results
+from experiments.studies import study
+from tasks.robots import resolve
 
 
 def add_parser(subparsers):
@@ -45,7 +48,6 @@ def add_parser(subparsers):
 def _check(args):
     """Every argument checked before any work: (problem, storage URL)."""
     from experiments.studies import evolve
-    from tasks.robots import resolve
     if args.population < 2:
         raise ValueError("--population must be at least 2 (CMA-ES keeps the better half)")
     import importlib.util
@@ -69,7 +71,6 @@ def _generations(args, s, problem):
     """The starting genome alone (enqueued by study.load; CMA-ES needs a complete trial to
     know the space), then one batch of --population trials per generation: (trials made,
     failed (name, error))."""
-    from experiments.studies import study
     made, failed = 0, []
     for n_trials, batch in ((1, 1), (1 + args.population * args.generations, args.population)):
         outcome = study.optimize(problem, s, args.out, n_trials, batch=batch,
@@ -85,7 +86,6 @@ def run(args):
         problem, url = _check(args)
     except ValueError as e:
         return fail(str(e))
-    from experiments.running import execution, results
     from experiments.studies import evolve, study
     label = execution.RunSpec(args.robot, "avoidance", 0, 1, drive=args.drive, room=args.room).label
     name = args.study or evolve.study_name(label, not args.no_learning)

@@ -5,6 +5,7 @@ import pathlib
 from experiments.checks import validate
 from experiments.commands import arguments
 from experiments.commands.common import fail
+from experiments.running import results
 
 
 def add_parser(subparsers):
@@ -38,7 +39,6 @@ def run(args):
         _check(args)
     except ValueError as e:
         return fail(str(e))
-    from experiments.running import results
     from experiments.studies import evolved
     try:
         path = evolved.write(args.evolve, args.hand, args.evolved, args.out, args.figures,

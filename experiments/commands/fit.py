@@ -6,6 +6,9 @@ import pathlib
 from experiments.checks import validate
 from experiments.commands import arguments
 from experiments.commands.common import check_room, fail, finish, open_study, study_storage
+from experiments.running import results
+from experiments.running.execution import ROOM_MARK
+from models.rooms import tag
 
 
 def add_parser(subparsers):
@@ -125,8 +128,6 @@ def _search(args, s, problem, names):
 
 def _in_room(name, room):
     """A study's default name: with "@<room>" in a room other than the paper's."""
-    from experiments.running.execution import ROOM_MARK
-    from models.rooms import tag
     return name if room is None else f"{name}{ROOM_MARK}{tag(room)}"
 
 
@@ -137,7 +138,6 @@ def run(args):
         return fail(str(e))
     if args.stage == "first-trial":
         return _first_trial(args, *names, url)
-    from experiments.running import results
     from experiments.studies import fit, study
     rungs = (tuple(args.seeds),) if args.seeds == args.promote_seeds else \
         (tuple(args.seeds), tuple(args.promote_seeds))
@@ -157,7 +157,6 @@ def run(args):
 
 def _first_trial(args, names, rungs, url):
     """`ebrl fit --stage first-trial` after its checks (experiments.studies.first_trials)."""
-    from experiments.running import results
     from experiments.studies import first_trials, study
     problem = first_trials.Problem(args.robot, names, rungs, args.steps, room=args.room)
     name = args.study or _in_room(f"first_trial_{args.robot}", args.room)

@@ -6,11 +6,13 @@ import pathlib
 from experiments.checks import validate
 from experiments.commands import arguments
 from experiments.commands.common import fail, finish
+from experiments.running import results
+from experiments.studies import mazes
+from models import rooms
 
 
 def sizes(text):
     """'9x6,15x15,21x21' -> ((9, 6), (15, 15), (21, 21))."""
-    from models import rooms
     out = []
     for part in text.split(","):
         w, sep, h = part.strip().partition("x")
@@ -27,7 +29,6 @@ def sizes(text):
 
 
 def add_parser(subparsers):
-    from experiments.studies import mazes
     p = subparsers.add_parser("maze-study",
                               help="both robots, both conditions, in random mazes of several sizes")
     p.add_argument("--sizes", type=sizes, default=mazes.SIZES, metavar="WxH,...",
@@ -45,9 +46,6 @@ def add_parser(subparsers):
 
 
 def run(args):
-    from experiments.running import results
-    from experiments.studies import mazes
-    from models import rooms
     try:
         validate.output_folder(args.out, "--out")
         arguments.check_results(args, (mazes.BEGIN, mazes.END))

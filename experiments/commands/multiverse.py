@@ -9,8 +9,13 @@ or none (--report-only). The records are read and checked before any work."""
 import pathlib
 
 from experiments.checks import validate
+from experiments.checks.validate import agent_configs
 from experiments.commands import arguments
 from experiments.commands.common import check_backend, fail, finish
+from experiments.running import results, schema
+from experiments.studies import multiverse, multiverse_records, multiverse_records as kept
+from experiments.studies.multiverse_records import key
+from tasks.robots import PAPER_ROBOTS
 
 #: The multiverse's own seeds (docs/seeds.md): 20 per universe, named before any run.
 SEEDS = list(range(11000, 11020))
@@ -52,9 +57,6 @@ def add_parser(subparsers):
 
 def _check(args):
     """Every argument checked before any work: (the chosen factors, the universes)."""
-    from experiments.checks.validate import agent_configs
-    from experiments.studies import multiverse
-    from tasks.robots import PAPER_ROBOTS
     validate.output_folder(args.out, "--out")
     if args.records is not None and not args.report_only:
         validate.output_folder(args.records, "--records")
@@ -78,8 +80,6 @@ def _bench(out, measure):
     """OUT/bench.json: ebrl bench's measure per paper robot, made now (measure) or before."""
     import functools
 
-    from experiments.running import results, schema
-    from tasks.robots import PAPER_ROBOTS
     path = out / "bench.json"
     check = functools.partial(schema.check_bench, robots=PAPER_ROBOTS)
     if measure:
@@ -94,7 +94,6 @@ def _bench(out, measure):
 def _records(args, chosen, universes):
     """(the records folder, the plan's specs, its Store, {spec: record} of the recorded
     ones): every record file read and checked against this call (RecordsError)."""
-    from experiments.studies import multiverse, multiverse_records
     folder = args.records if args.records is not None else args.out / "records"
     store = multiverse_records.Store(folder, multiverse_records.identity(chosen, args.steps))
     specs = multiverse.plan(universes, args.seeds, args.steps)
@@ -102,8 +101,6 @@ def _records(args, chosen, universes):
 
 
 def _levels(chosen):
-    from experiments.studies import multiverse
-    from tasks.robots import PAPER_ROBOTS
     return {f.key: {r: [multiverse.levels(f, r).plain, multiverse.levels(f, r).alternative]
                     for r in PAPER_ROBOTS} for f in multiverse.factors()}
 
@@ -112,9 +109,6 @@ def _make(args, chosen, specs, made, folder):
     """Runs what no record holds (a complete run folder under OUT/runs without a record
     gives its record first), each run's record appended as it is written; returns
     runner.Ran."""
-    from experiments.running import results
-    from experiments.studies import multiverse
-    from experiments.studies import multiverse_records as kept
     writer = kept.Writer(folder, kept.identity(chosen, args.steps), _levels(chosen),
                          args.workers, args.backend)
     kept.seal_left(folder)
@@ -147,8 +141,6 @@ def _report(args, chosen, design, universes, folder, specs, store, made):
     """The table, the figures and MULTIVERSE.md from the records (made: {spec: record})."""
     from experiments.outputs import multiverse as mv
     from experiments.outputs import multiverse_report as mr
-    from experiments.running import results
-    from experiments.studies import multiverse
     out = args.out
     data = multiverse.gather(universes, args.seeds, args.steps, made)
     records = {(name, d): mv.universe_record(runs, d)
@@ -167,7 +159,6 @@ def _report(args, chosen, design, universes, folder, specs, store, made):
         steps_by_robot[s.robot] = steps_by_robot.get(s.robot, 0) + s.steps
     failed = [] if args.report_only else multiverse.failed(out, [s for s in specs
                                                                  if s not in made])
-    from experiments.studies.multiverse_records import key
     matched = {key(s) for s in made}
     ctx = mr.Context(factor_list, chosen, design, universes, records, analysis, args.seeds,
                      args.steps, len(specs), [float(r["seconds"]) for r in made.values()],
@@ -186,8 +177,6 @@ def _report(args, chosen, design, universes, folder, specs, store, made):
 
 
 def run(args):
-    from experiments.running import results
-    from experiments.studies import multiverse
     try:
         chosen, (design, universes) = _check(args)
         folder, specs, store, made = _records(args, chosen, universes)

@@ -6,7 +6,10 @@ from experiments import paper
 from experiments.checks import validate
 from experiments.commands import arguments
 from experiments.commands.common import check_agent, check_behaviour, check_robots, fail
+from experiments.outputs import rendering
+from experiments.outputs.rendering import PATH_STYLES
 from experiments.running import settings
+from experiments.running import execution
 
 
 def comparison(text):
@@ -30,7 +33,6 @@ def comparison(text):
 
 
 def add_parser(subparsers):
-    from experiments.outputs.rendering import PATH_STYLES
     p = subparsers.add_parser("render", help="an offscreen MP4 of one run, or of two side by side")
     arguments.add_robots(p, None, several=False)
     arguments.add_room(p)
@@ -96,7 +98,6 @@ def _check(args):
 
 def _specs(args, variants, genome):
     """One RunSpec per variant; with --compare behaviour, the first runs the paper's rule."""
-    from experiments.running import execution
     paper_first = args.compare is not None and args.compare[0] == "behaviour"
     return [execution.RunSpec(args.robot, condition, args.seed, args.steps, tuple(sorted(pairs)),
                              drive=args.drive,
@@ -110,7 +111,6 @@ def run(args):
         variants, genome = _check(args)
     except ValueError as e:
         return fail(str(e))
-    from experiments.outputs import rendering
     specs = _specs(args, variants, genome)
     labels = [label for label, _, _ in variants]
     try:

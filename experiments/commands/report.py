@@ -5,6 +5,8 @@ import pathlib
 from experiments.checks import validate
 from experiments.commands import arguments
 from experiments.commands.common import RUNS_FAILED, fail, failed_line
+from experiments.running import results
+from models import rooms
 
 
 def add_parser(subparsers):
@@ -12,7 +14,6 @@ def add_parser(subparsers):
     p.add_argument("dir", type=pathlib.Path)
     arguments.add_results(p, "the tables of this page (between its markers), copy the "
                              "figures to --figures and summary.json beside it")
-    from models import rooms
     p.add_argument("--room", type=arguments.room, default=False, metavar="NAME|FILE",
                    help="only the runs in this room (default: every room's runs, each "
                         f"robot's rows in its own room; {rooms.DEFAULT}: the paper's)")
@@ -65,7 +66,6 @@ def run(args):
     except ValueError as e:
         return fail(str(e))
     from experiments.outputs import report
-    from experiments.running import results
     try:
         path = report.build(args.dir, args.room)
         if args.results is not None:
@@ -89,7 +89,6 @@ def _headline(args):
     the page and its README (experiments.outputs.headline); the literal summary kept
     beside the page."""
     from experiments.outputs import headline
-    from experiments.running import results
     path = args.literal / "summary.json"
     literal = path.read_bytes()
     parsed = results.read_summary(path)

@@ -1,6 +1,7 @@
 """`ebrl rooms`: the shipped maps (models/maps/), each with its size and shortest path;
 with --show NAME|FILE, one map's text (and random:WxH:SEED's maze)."""
 from experiments.commands import arguments
+from models import rooms
 
 
 def add_parser(subparsers):
@@ -11,7 +12,6 @@ def add_parser(subparsers):
 
 
 def run(args):
-    from models import rooms
     if args.show is not False:
         m = rooms.load(rooms.DEFAULT if args.show is None else args.show)
         print(m.text(), end="")

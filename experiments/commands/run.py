@@ -7,10 +7,11 @@ from experiments.commands import arguments
 from experiments.commands.common import (check_agent, check_backend, check_behaviour,
                                           check_robots, fail, plan, report_if_any,
                                           run_summary)
+from experiments.running import results, runner
+from experiments.running.learners import AGENTS
 
 
 def add_parser(subparsers):
-    from experiments.running.execution import AGENTS
     p = subparsers.add_parser("run", help="run the protocol (skips runs already on disk)")
     arguments.add_robots(p, "paper")
     arguments.add_room(p)
@@ -49,7 +50,6 @@ def run(args):
         genome = check_behaviour(args, args.set)
     except ValueError as e:
         return fail(str(e))
-    from experiments.running import results, runner
     specs = plan(args, args.set)
     if genome is not None:
         import dataclasses

@@ -8,10 +8,12 @@ from experiments.commands import arguments
 from experiments.commands.common import (check_agent, check_robots, fail, finish, plan,
                                           selected_robots)
 from experiments.running import settings
+from experiments.running import results, runner
+from experiments.running.learners import AGENTS
+from tasks.robots import resolve
 
 
 def add_parser(subparsers):
-    from experiments.running.execution import AGENTS
     p = subparsers.add_parser("sweep",
                               help="the protocol at several values of one agent parameter")
     p.add_argument("--param", default="policy_threshold")
@@ -67,7 +69,6 @@ def _check(args):
 def _baseline(args):
     """The baseline folder's runs at the default value (None without --baseline), refused
     before running any when some are missing."""
-    from experiments.running import results, runner
     if args.baseline is None:
         return None
     specs = plan(args)
@@ -80,7 +81,6 @@ def _baseline(args):
 def _with_baseline(args, rows, baseline):
     """The table's rows with the baseline's in its place: by value at the robots' shared
     default, else first."""
-    from tasks.robots import resolve
     default = settings.default(
         args.param, [resolve(r, args.drive) for r in selected_robots(args)])
     if default is None:  # the robots' defaults differ: the baseline first
@@ -94,7 +94,6 @@ def _with_baseline(args, rows, baseline):
 def _sweep(args, values):
     """Runs every value's folder: (the table's path or None, the failed (name, error))."""
     from experiments.outputs import report
-    from experiments.running import results, runner
     plans = [(args.out / f"{args.param}_{v}", plan(args, [(n, v)])) for n, v in values]
     baseline = _baseline(args)  # the default's runs, checked before running any
     for folder, specs in plans:  # refuse mismatched folders, set damaged runs aside, first
@@ -121,7 +120,6 @@ def run(args):
         values = _check(args)
     except ValueError as e:
         return fail(str(e))
-    from experiments.running import results
     try:
         path, failed = _sweep(args, values)
     except results.ResultsError as e:

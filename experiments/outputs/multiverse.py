@@ -45,7 +45,10 @@ import numpy as np
 from experiments import paper
 from experiments.outputs import report, verdicts
 from experiments.running import results
+from experiments.running import execution
+from experiments.studies import design
 from tasks.robots import DRIVES
+from tasks.robots import PAPER_ROBOTS, ROBOTS
 
 BOOTSTRAP = 2000
 SEED = 20240551
@@ -117,8 +120,6 @@ def run_of(record, definition):
     """A record (experiments.studies.multiverse_records) as the run the summary takes
     (results.summarize: its metrics, its steps, its memory decisions), its steps per
     trial by the definition."""
-    from experiments.running import execution
-    from tasks.robots import ROBOTS
     trials = record["trials"]
     metrics = execution.metrics(np.cumsum(np.asarray(trials, dtype=np.int64)))
     if definition == "budget":
@@ -259,7 +260,6 @@ def table(factor_list, universes, records):
     marks, the definition, each factor's code, each robot's readings, the twelve figures
     and the ten claims with their intervals ("" where not computed; complete 0 for a
     universe with runs missing)."""
-    from tasks.robots import PAPER_ROBOTS
     names = {r: sorted({n for u in universes for n in u.readings(r)}) for r in PAPER_ROBOTS}
     head = ["universe", "row", "marks", CHOICE, "complete"] + [f.key for f in factor_list]
     head += [f"{r}.{n}" for r in PAPER_ROBOTS for n in names[r]]
@@ -302,7 +302,6 @@ def fit_effects(codes, y):
     {(i, j): effect}} (an effect is twice the coefficient: alternative less plain), pairs
     only where the universes identify every two-factor interaction, mains only where they
     identify the main effects; None where not even those."""
-    from experiments.studies import design
     codes, y = np.asarray(codes, dtype=np.float64), np.asarray(y, dtype=np.float64)
     if len(y) == 0:
         return None

@@ -12,9 +12,13 @@ import warnings
 
 import numpy as np
 
+from experiments import paper
 from experiments.outputs import multiverse as mv
 from experiments.outputs import report
 from experiments.running import results
+from experiments.studies import multiverse as study
+from tasks.protocols import PROTOCOL_VERSION
+from tasks.robots import PAPER_ROBOTS
 
 #: Machines of this many cores for the Ray estimate.
 RAY_CORES = 16
@@ -29,7 +33,6 @@ def spec_curve(claim, factor_list, chosen, universes, records, path):
     """The claim's specification curve as a PNG at path: every complete universe's
     statistic, under each definition of steps per trial for a claim of steps per trial
     (mv.by_definition); None when no universe has its statistic."""
-    from experiments.studies import multiverse as study
     definitions = mv.DEFINITIONS if mv.by_definition(claim) else mv.DEFINITIONS[:1]
     pts = [(u, d) for u in universes for d in definitions if records.get((u.name, d))
            and _value(records, (u, d), claim)["value"] is not None
@@ -115,8 +118,6 @@ def _level_text(values):
 
 
 def factor_table(factor_list, chosen):
-    from experiments.studies import multiverse as study
-    from tasks.robots import PAPER_ROBOTS
     lines = ["| factor | in the design | " + " | ".join(f"{r}: plain -> alternative"
                                                       for r in PAPER_ROBOTS)
              + " | the paper's words |", "|---|:-:|" + "---|" * len(PAPER_ROBOTS) + "---|"]
@@ -207,7 +208,6 @@ def figures_table(universes, records):
     """The twelve figures: the paper's, the literal and the current protocol's, and their
     spread over the design's complete universes; steps per trial and the shrink under
     each definition of steps per trial."""
-    from experiments import paper
     marked = [next((u for u in universes if m in u.marks), None) for m in ("literal", "current")]
     lines = ["| robot | condition | figure | steps per trial | paper | literal | current | "
              "universes: median (5%-95%) | within 1.5x of the paper |",
@@ -336,8 +336,6 @@ def protocols_text(universes, factor_list):
     """Which universe each protocol is, from tasks.protocols as it stands: the literal
     one the design's all-plain row (u001), the adopted one the universe at each factor's
     adopted level (a row of the design, or `current` beside it), its levels named."""
-    from tasks.protocols import PROTOCOL_VERSION
-    from tasks.robots import PAPER_ROBOTS
     literal = next((u for u in universes if "literal" in u.marks), None)
     current = next(u for u in universes if "current" in u.marks)
     up = []
@@ -360,7 +358,6 @@ def protocols_text(universes, factor_list):
 
 
 def markdown(ctx):
-    from tasks.protocols import PROTOCOL_VERSION
     seeds = ctx.seeds
     seed_text = f"{seeds[0]}-{seeds[-1]}" if seeds == list(range(seeds[0], seeds[-1] + 1)) \
         else ",".join(map(str, seeds))

@@ -19,6 +19,8 @@ import heapq
 import math
 
 import numpy as np
+import tasks
+from models import rooms
 
 ARC_POINTS = 6  # per rounded corner
 
@@ -210,8 +212,6 @@ def optimal(robot, drive=None, room=None):
     """{'length', 'steps', 'steps_lower', 'path'} for robot (a registered name, or a file
     with its drive) from the room's nominal start, in paper units; steps is the feasible
     plan, steps_lower a bound no trial can beat. room: models.rooms' (None: the paper's)."""
-    import tasks
-    from models import rooms
     from tasks import navigation
     entry = tasks.resolve(robot, drive)
     field, obstacles, goal, start = rooms.layout(room)

@@ -38,8 +38,11 @@ import tempfile
 
 import numpy as np
 
+import tasks
 from experiments.outputs.overlays import (GRID, box_at, landmark_boxes, legend_size,
                                          legend_swatches, place, text_size)
+from experiments.running import execution, results
+from models import PREFIX, contract_names
 
 BACKENDS = ("egl", "osmesa")
 HEIGHT, WIDTH = 480, 640
@@ -115,7 +118,6 @@ def ensure_backend():
 def camera_names(physics):
     """The cameras a video can use: the room's (top, perspective), the robot's (by the
     name in its file) and follow."""
-    from models import PREFIX
     m = physics.model
     names = [m.id2name(i, "camera") for i in range(m.ncam)]
     return [n[len(PREFIX):] if n.startswith(PREFIX) else n for n in names] + ["follow"]
@@ -123,7 +125,6 @@ def camera_names(physics):
 
 def check_camera(spec, camera):
     """RenderingError unless the run's room and robot have `camera`."""
-    import tasks
     env = tasks.load(spec.entry, seed=0, room=spec.room)
     try:
         names = camera_names(env.physics)
@@ -137,7 +138,6 @@ def _camera(physics, camera):
     """A camera name of the model, or an MjvCamera for follow."""
     import mujoco
 
-    from models import PREFIX, contract_names
     m = physics.model
     if camera == "follow":
         cam = mujoco.MjvCamera()
@@ -359,7 +359,6 @@ def _video(path, fps=FPS, quality=7):
     a full disk is results.WriteError naming the folder, an earlier video kept whole. An
     encoder that stops on the disk's error (a broken pipe, imageio's RuntimeError) is
     reported as the disk's."""
-    from experiments.running import results
     with results.atomic_file(path) as tmp:
         writer = _writer(tmp, fps, quality)
         try:
@@ -398,7 +397,6 @@ def record(spec, path, *, frames=600, fps=FPS, camera="top", beams=True, path_st
     overlays chosen (see the module's docstring); at most about `frames` frames. Returns
     the run's result (execution.execute's) with `decisions`, who chose each step's action
     (indices of `decider_names`)."""
-    from experiments.running import execution
     explainer = Explainer(spec, every=_every(spec, frames), camera=camera, label=label,
                           beams=beams, path=path_style, caption=caption)
     with _video(path, fps, quality) as writer:
@@ -418,7 +416,6 @@ def record_compare(specs, labels, path, *, frames=600, fps=FPS, camera="top", be
     """Two runs side by side in one MP4: specs[0] on the left, specs[1] on the right, a
     frame of each at the same steps (the specs must have the same number of steps). The
     left run is recorded first to a temporary file, read back beside the right one."""
-    from experiments.running import execution
     left, right = specs
     if left.steps != right.steps:
         raise ValueError("the two runs of a comparison must have the same number of steps")

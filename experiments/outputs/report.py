@@ -8,13 +8,14 @@ import numpy as np
 
 from experiments import paper
 from experiments.outputs import page, verdict_tables, verdicts
+from experiments.outputs import optimal
 from experiments.running import lock, provenance, results
+from models import rooms
 from tasks.robots import DRIVES
 
 @functools.cache
 def _room_layout(room=None):
     """The room's layout from its map (models.rooms.layout), once per room."""
-    from models import rooms
     return rooms.layout(room)
 
 
@@ -378,7 +379,6 @@ def replace_block(path, begin, end, block):
 
 
 def optimal_table(rows):
-    from experiments.outputs import optimal
     return optimal.table(rows)
 
 

@@ -32,6 +32,7 @@ import numpy as np
 from scipy import special
 
 from experiments import paper
+from tasks.robots import DRIVES
 
 ALPHA = 0.05
 #: The equivalence margin, as ratios of our mean (or shrink) to the paper's
@@ -293,7 +294,6 @@ def shrink_rows(summary):
 
 
 def _at_two_wheel_budget(group):
-    from tasks.robots import DRIVES
     return group.get("drive") == "two_wheel" and not group.get("room") and \
         group["steps"] == DRIVES["two_wheel"].budget
 

@@ -17,11 +17,15 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 import ebrl
-from ebrl.behaviour import Accelerating, Turning
+import tasks
+from experiments.running.learners import learner
+from models import rooms
+from tasks.config import TaskConfig
 from tasks.protocols import PROTOCOLS
+from tasks.robots import resolve
 
-if TYPE_CHECKING:  # tasks is imported where a spec needs it, not with this module
-    from tasks.config import TaskConfig
+if TYPE_CHECKING:
+    from ebrl.behaviour import Accelerating, Turning
     from tasks.robots import Robot
 
 #: Positions are stored as int16 hundredths of a unit.
@@ -61,8 +65,7 @@ class RunSpec:
 
     def __post_init__(self):
         if self.room is not None:
-            from models.rooms import DEFAULT
-            if str(self.room) == DEFAULT:
+            if str(self.room) == rooms.DEFAULT:
                 object.__setattr__(self, "room", None)
             else:
                 object.__setattr__(self, "room", str(self.room))
@@ -70,7 +73,6 @@ class RunSpec:
     @property
     def entry(self) -> Robot:
         """The robot's registry entry (tasks.robots.Robot), under the spec's protocol."""
-        from tasks.robots import resolve
         return resolve(self.robot, self.drive).under(self.protocol)
 
     @property
@@ -85,8 +87,7 @@ class RunSpec:
         name = name + FIRST_TRIAL if self.first_trial else name
         if self.room is None:
             return name
-        from models.rooms import tag
-        return f"{name}{ROOM_MARK}{tag(self.room)}"
+        return f"{name}{ROOM_MARK}{rooms.tag(self.room)}"
 
     @property
     def name(self) -> str:
@@ -96,13 +97,13 @@ class RunSpec:
         """EBRL: Table 1's column for the robot; a baseline: its config's defaults; with the
         robot's readings (its protocol's: tasks.protocols.Protocol.readings_for), then the
         overrides, that name the config's fields."""
-        config_cls, _ = agent_classes(self.agent)
+        config_cls = learner(self.agent).config
         fields = {f.name for f in dataclasses.fields(config_cls)}
         mine = {k: v for k, v in (self.entry.agent_readings() | dict(self.overrides)).items()
                 if k in fields}
         if self.behaviour is not None:
-            from ebrl.behaviour import config_fields
-            mine.update({k: v for k, v in config_fields(self.behaviour).items() if k in fields})
+            genome = ebrl.behaviour.config_fields(self.behaviour)
+            mine.update({k: v for k, v in genome.items() if k in fields})
         if self.agent == "ebrl":
             return ebrl.paper_config(self.entry.table1, **mine)
         return config_cls(**mine)
@@ -110,7 +111,6 @@ class RunSpec:
     def task_config(self) -> TaskConfig:
         """The paper's task with the robot's readings, then the overrides that name task
         fields."""
-        from tasks.config import TaskConfig
         fields = {f.name for f in dataclasses.fields(TaskConfig)}
         return self.entry.task_config(**{k: v for k, v in self.overrides if k in fields})
 
@@ -141,28 +141,14 @@ class RunSpec:
 
 
 def _genome_dict(genome):
-    from ebrl.behaviour import to_dict
-    return to_dict(genome)
+    return ebrl.behaviour.to_dict(genome)
 
 
 def model_digest(entry, task_config, room=None):
     """A digest of the composed MJCF with the entry's options and the task config's edits,
     so results made with another model never match (tasks.compiled_model: composed and
     compiled once per process and model, the run then loads a copy)."""
-    import tasks
     return tasks.compiled_model(entry, task_config, room)[1]
-
-
-#: The learners `ebrl run --agent` knows: the paper's, then the baselines of Section 4.
-LEARNERS = {"ebrl": (ebrl.Config, ebrl.Agent), **ebrl.baselines.AGENTS}
-AGENTS = tuple(LEARNERS)
-
-
-def agent_classes(name):
-    """(config class, agent class) of a learner of AGENTS."""
-    if name not in LEARNERS:
-        raise ValueError(f"unknown agent {name!r}; valid: {', '.join(AGENTS)}")
-    return LEARNERS[name]
 
 
 def seeds_for(seed):
@@ -195,7 +181,7 @@ def make_agent(spec, env):
         fallback = ebrl.intrinsic.fallback_for(entry.avoidance, spec.condition,
                                                config.intrinsic_random_rate, config.random_sd,
                                                **switches)
-    _, agent_cls = agent_classes(spec.agent)
+    agent_cls = learner(spec.agent).agent
     return agent_cls(config, sum(sizes), env.action_spec().shape[0], fallback,
                      groups=groups, group_weights=weights, seed=agent_seed)
 
@@ -320,7 +306,6 @@ def execute(spec, on_step=None, fused=True):
     fused: where experiments.running.fused supports the run, run stretches of steps in
     one compiled call each (Trials); fused=False forces the step-by-step loop.
     """
-    import tasks
     from tasks.kernels.bindings import stage_timers_off
 
     env_seed, _ = seeds_for(spec.seed)

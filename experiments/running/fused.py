@@ -23,15 +23,17 @@ both conditions.
 import numpy as np
 from numba import njit
 
+import ebrl
+import tasks
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl import kernels as agent_kernels
 from ebrl import steps as agent_steps
 from ebrl import records
 from ebrl.agent import act_step, invalid_observation, trial_end
+from tasks import navigation
 from tasks.kernels import bindings, body
 from tasks.kernels import steps as drive_steps
 from tasks.kernels.stream import task_draws
-from tasks import navigation
 
 #: Why a stretch ended.
 GOAL, BUDGET, REFILL, FAILED, INVALID = range(5)
@@ -153,8 +155,6 @@ class Loop:
         """True where `run` computes what the step-by-step loop does: EBRL with a compiled
         fallback, on a task with a compiled drive whose modalities it composes, and no
         per-step callback."""
-        import ebrl
-        import tasks
         return (on_step is None and type(agent) is ebrl.Agent and agent.compiled
                 and isinstance(env, tasks.Environment) and env.steps_compiled
                 and "range" in keys and set(keys) <= set(MODALITIES))

@@ -23,9 +23,12 @@ import numpy as np
 
 from experiments import paper
 from experiments.running import execution, schema
+from experiments.running import lock
 from experiments.running.disk import (TEST_DISK_FULL, TEST_DISK_FULL_AT,  # noqa: F401
                                       ResultsError, WriteError, atomic_file, atomic_write,
                                       tmp_prefix, write_error)
+from experiments.running.learners import AGENTS
+from tasks.robots import ROBOTS
 
 BOOTSTRAP_SAMPLES = 10_000
 BOOTSTRAP_SEED = 20000  # the paper's year: any fixed number makes summaries reproducible
@@ -55,7 +58,6 @@ def versions():
     except (OSError, subprocess.SubprocessError):
         commit, dirty = "", ""
     out["git_commit"] = (commit + ("+dirty" if dirty else "")) or "unknown"
-    from experiments.running import lock
     out.update(lock.describe())  # the lock file's digest, and whether it is what is installed
     return out
 
@@ -392,8 +394,6 @@ def trial_paths(trace, starts, trial_ends):
 def robot_order(label):
     """Group labels ("robot" or "robot.agent") in the registry's order of robots, then
     by learner (EBRL first); robots not in the registry after them."""
-    from experiments.running.execution import AGENTS
-    from tasks.robots import ROBOTS
     names = list(ROBOTS)
     robot, _, agent = label.removesuffix(execution.FIRST_TRIAL).partition(".")
     return (names.index(robot) if robot in names else len(names),

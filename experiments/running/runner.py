@@ -21,6 +21,7 @@ import sys
 import time
 
 from experiments.running import execution, pool, ray_cluster, results
+from tasks.robots import resolve
 
 
 #: What run() did: runs made now, runs already on disk, and (spec, error) per failed run.
@@ -35,7 +36,6 @@ def plan(robots, conditions, seeds, steps=None, overrides=(), drive=None, agent=
     by robot; drive: for robots given as files; first_trial: runs that end at their
     first goal (execution.RunSpec.first_trial); readings: a named protocol
     (tasks.robots.PROTOCOLS: RunSpec.protocol); room: the room (execution.RunSpec.room)."""
-    from tasks.robots import resolve
 
     def budget(robot):
         if isinstance(steps, dict):

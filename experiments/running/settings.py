@@ -3,24 +3,24 @@ the task's, each with the kind of value it takes and its default, the robots' ow
 their registry entries give one; a setting that is a reading of the paper takes its kind
 and allowed values from the readings' registry (tasks.readings). What a setting is, not
 how the command line parses it (experiments.checks.validate does that). Imports nothing
-heavy until asked.
+heavy.
 """
+import dataclasses
+
+from experiments.running.learners import LEARNERS
+from tasks.config import TaskConfig
+from tasks.readings import BY_NAME
 
 
 def _classes():
     """The config classes whose fields --set may name: every learner's, then the task's."""
-    from experiments.running import execution
-    from tasks.config import TaskConfig
-    return [execution.agent_classes(a)[0] for a in execution.AGENTS] + [TaskConfig]
+    return [learner.config for learner in LEARNERS.values()] + [TaskConfig]
 
 
 def kinds():
     """Every --set name, the learners' (ebrl.Config, the baselines') then the task's
     (tasks.TaskConfig), with the type its value takes (a reading's from its registry
     entry, else its default's)."""
-    import dataclasses
-
-    from tasks.readings import BY_NAME
     found = {}
     for cls in _classes():
         default = cls()
@@ -34,7 +34,6 @@ def check(name, value):
     """value for the setting name, or ValueError in one line where name is a reading of
     the paper and value not among its allowed values (tasks.readings; the configs check
     the rest, experiments.checks.validate.agent_configs)."""
-    from tasks.readings import BY_NAME
     return BY_NAME[name].check(value) if name in BY_NAME else value
 
 

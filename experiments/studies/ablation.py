@@ -16,7 +16,9 @@ import pathlib
 from experiments import paper
 from experiments.outputs import report
 from experiments.running import results, runner
+from experiments.running import settings
 from tasks import readings as registry
+from tasks.robots import PAPER_ROBOTS, ROBOTS, resolve
 
 
 @dataclasses.dataclass(frozen=True)
@@ -83,8 +85,6 @@ def cells(readings, combos):
 def _is_default(changes, robot):
     """Whether every change is already the robot's default (its readings, else the
     config's field): such a cell is the default's cell for that robot."""
-    from tasks.robots import resolve
-    from experiments.running import settings
     entry = resolve(robot)
     return all(settings.default(name, [entry]) == value for name, value in changes)
 
@@ -92,7 +92,6 @@ def _is_default(changes, robot):
 def _concerns(changes, robot, condition):
     """Whether every ablated reading a cell changes acts on this robot (its drive, its
     fallback behaviour) and this condition (the registry's scope, tasks.readings.applies)."""
-    from tasks.robots import resolve
     entry = resolve(robot)
     return all(registry.applies(BY_NAME[name].reading, entry, condition)
                for name, _ in changes if name in BY_NAME)
@@ -177,8 +176,6 @@ def _row(cell, g):
 
 def _defaults(name):
     """A reading's default, per paper robot where they differ: 'keep (floating), zero'."""
-    from tasks.robots import PAPER_ROBOTS, ROBOTS
-    from experiments.running import settings
     values = {r: settings.default(name, [ROBOTS[r]]) for r in PAPER_ROBOTS}
     if len(set(map(str, values.values()))) == 1:
         return next(iter(values.values()))

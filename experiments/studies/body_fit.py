@@ -24,6 +24,7 @@ import pathlib
 import sys
 
 from experiments import paper
+from experiments.commands.arguments import seeds as parse_seeds
 from experiments.outputs import verdicts
 from experiments.running import results
 from experiments.studies import first_trials, grid
@@ -114,7 +115,6 @@ def parse_body(text):
 
 
 def main(argv=None):
-    from experiments.commands.arguments import seeds as parse_seeds
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--seeds", type=parse_seeds, required=True)
     p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("body-fit"))

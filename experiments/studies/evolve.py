@@ -29,10 +29,14 @@ import json
 import math
 import pathlib
 
+import tasks
 from ebrl import behaviour as genomes
 from experiments.outputs import report
 from experiments.running import results
+from experiments.running import runner
+from experiments.running.execution import RunSpec
 from experiments.studies import study
+from tasks.robots import ROBOTS, resolve
 
 #: The search's radius of each field (of a vector's every entry) around the starting
 #: genome: each number is searched in [start - radius, start + radius], so CMA-ES's mean
@@ -86,7 +90,6 @@ def check_genome(path, robots, drive=None, overrides=()):
     file is bad, its behaviour is not the robots' (eq8 for the two-wheel drive, eq9-10
     for the floating one), its weights do not match a robot's beams, or a --set names a
     field the genome sets."""
-    from tasks.robots import resolve
     genome = genomes.load(path)
     for robot in robots:
         entry = resolve(robot, drive)
@@ -108,8 +111,6 @@ def check_genome(path, robots, drive=None, overrides=()):
 def paper_genome(entry):
     """The paper's rule for a robot's drive as a genome, with the robot's readings of the
     learning variables and the dead zone (its agent config, execution.RunSpec)."""
-    from experiments.running.execution import RunSpec
-    from tasks.robots import ROBOTS
     drive = None if entry.name in ROBOTS else entry.drive  # a robot file: its drive
     config = RunSpec(entry.name, CONDITION, 0, 1, drive=drive).agent_config()
     return genomes.paper(entry.avoidance, range_beams(entry), config)
@@ -124,7 +125,6 @@ def write_paper(folder):
     FOLDER/paper_<behaviour>.json (the shipped behaviours/ folder is made so:
     `python -c 'from experiments.studies import evolve; evolve.write_paper("behaviours")'`;
     tests/test_evolve.py checks it is current)."""
-    from tasks.robots import ROBOTS
     folder = pathlib.Path(folder)
     entries = [ROBOTS[r] for r in PAPER_FILE_ROBOTS]
     return [genomes.save(paper_genome(e), folder / f"paper_{e.avoidance}.json")
@@ -133,7 +133,6 @@ def write_paper(folder):
 
 def range_beams(entry):
     """The number of rangefinder beams of a robot (its task, loaded once)."""
-    import tasks
     env = tasks.load(entry)
     try:
         return int(env.observation_spec()["range"].shape[0])
@@ -179,7 +178,6 @@ class Problem:
         return genomes.with_flat(self.start, clipped)
 
     def specs(self, params, seeds):
-        from experiments.running import runner
         genome = self.genome(params)
         overrides = () if self.learning else NO_LEARNING
         return [dataclasses.replace(s, behaviour=genome) for s in

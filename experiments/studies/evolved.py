@@ -22,6 +22,8 @@ from ebrl import behaviour as genomes
 from experiments.outputs import report
 from experiments.running import results
 from experiments.studies import study
+from experiments.studies import evolve
+from tasks.robots import ROBOTS
 
 #: The paper's robots whose behaviours are evolved, and the 3D robot each transfers to.
 PLANAR = ("two_wheel", "floating")
@@ -106,8 +108,6 @@ def comparison_table(rows, robots):
 
 def genome_table(evolve_dir, robot):
     """The paper's genome beside the two evolved ones, field by field."""
-    from experiments.studies import evolve
-    from tasks.robots import ROBOTS
     cols = [("the paper's rule", evolve.paper_genome(ROBOTS[robot]))]
     for label, name in (("for the learner", evolve.study_name(robot)),
                         ("as a controller", evolve.study_name(robot, learning=False))):
@@ -136,7 +136,6 @@ def fitness_lines(evolve_dir, robot, figures):
     """The studies' settings, first and best fitness, and their figures (under figures)."""
     import optuna
 
-    from experiments.studies import evolve
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     storage = study.storage_url(None, evolve_dir)
     lines = []

@@ -22,8 +22,10 @@ import pathlib
 import numpy as np
 
 from experiments import paper
+from experiments.checks.validate import once
 from experiments.running import results, runner, schema
 from experiments.studies import study
+from experiments.studies.fit import param
 
 STAGE = "first-trial"
 #: The kurtosis the sd's standard error assumes: an exponential's (9), which the paper's
@@ -40,7 +42,6 @@ MIN_SEEDS = 64
 def _param(name, bounds=None):
     """A reading of the registry in a drive's space (fit.param; its scope: the drive's
     alone), a number within bounds (low, high), this stage's choice."""
-    from experiments.studies.fit import param
     return param(name, bounds, scope="drive")
 
 
@@ -77,7 +78,6 @@ def space(drive, text="all"):
     if unknown or not names:
         raise ValueError(f"unknown reading {unknown[0] if unknown else text!r} in --space "
                          f"for --stage {STAGE} --robot {drive}; valid: {', '.join(mine)}")
-    from experiments.checks.validate import once
     return once(names, "--space")
 
 

@@ -30,8 +30,10 @@ import pathlib
 from experiments import paper
 from experiments.outputs import report
 from experiments.running import results, schema
+from experiments.running import runner, settings
 from experiments.studies import study
 from tasks import readings as registry
+from tasks.robots import resolve
 
 STUDY_NAME = "fit"
 #: The robots of a trial: the floating robot searched, the two-wheel robot its constraint.
@@ -104,8 +106,6 @@ def default(name, robot="floating"):
     else the config's field; the file's radius 1.5 and friction 1 where that is None).
     The search's subject is the floating robot: its defaults are trial 0 and the text
     of a trial's readings; a setting shared by both robots is run as given on each."""
-    from experiments.running import settings
-    from tasks.robots import resolve
     value = settings.default(name, [resolve(robot)])
     return {"radius": 1.5, "wall_friction": 1.0}.get(name, value) if value is None else value
 
@@ -113,7 +113,6 @@ def default(name, robot="floating"):
 def overrides(params, robot):
     """A trial's settings for one robot, as sorted (name, value) pairs, defaults left out
     (so a setting equal to the defaults shares their runs)."""
-    from tasks.robots import resolve
     floating = resolve(robot).drive == "floating"
     chosen = {k: v for k, v in params.items()
               if (BY_NAME[k].scope == "both" or floating) and v != default(k, robot)}
@@ -132,7 +131,6 @@ class Problem:
         return {n: BY_NAME[n].distribution() for n in self.names}
 
     def specs(self, params, seeds):
-        from experiments.running import runner
         out = []
         for robot in ROBOTS:
             out += runner.plan((robot,), paper.CONDITIONS, seeds, self.steps,
@@ -203,7 +201,6 @@ def validate_best(problem, trial_params, out, seeds, workers=None, backend="loca
                   progress=True):
     """Runs a trial's settings and the defaults on seeds (full budgets, never used by
     the search); writes and returns validation.json's content."""
-    from experiments.running import runner
     where = lambda spec: study.run_folder(out, spec)  # noqa: E731
     rows = {}
     plans = {"best": problem.specs(trial_params, seeds), "defaults": problem.specs({}, seeds)}

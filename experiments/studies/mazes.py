@@ -21,6 +21,7 @@ import pathlib
 import numpy as np
 
 from experiments.running import execution, results, runner
+from models import rooms
 
 ROBOTS = ("two_wheel", "floating")
 CONDITIONS = ("random", "avoidance")
@@ -38,7 +39,6 @@ def room(size, maze):
 
 
 def budget(size, maze, per_cell=STEPS_PER_CELL):
-    from models import rooms
     return per_cell * rooms.load(room(size, maze)).shortest_cells()
 
 
@@ -58,7 +58,6 @@ def run(out, specs, workers=1, progress=True):
 
 def _units(out, specs):
     """{(robot, size): {(maze, seed): {condition: metrics with 'steps'}}} of complete runs."""
-    from models import rooms
     table = {}
     for spec in specs:
         if results.existing(out, spec) != "done":

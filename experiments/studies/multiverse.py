@@ -40,6 +40,8 @@ import xml.etree.ElementTree as ElementTree
 
 from experiments import paper
 from experiments.running import results, runner
+from experiments.studies import design
+from models import UNIT
 from tasks import protocols
 from tasks import readings as registry
 from tasks.robots import PAPER_ROBOTS, ROBOTS
@@ -161,7 +163,6 @@ _FILE_FRICTION = 1.0
 @functools.cache
 def file_radius(robot):
     """The radius in units of a paper robot's hull, from its MJCF file."""
-    from models import UNIT
     root = ElementTree.parse(ROBOTS[robot].model).getroot()
     hull = next(g for g in root.iter("geom") if g.get("name") == "hull")
     return round(float(hull.get("size").split()[0]) / UNIT, 9)  # 0.15 m: 1.5, not 1.4999...
@@ -289,7 +290,6 @@ def current_codes(robot):
 
 
 def design_for(chosen):
-    from experiments.studies import design
     return design.fractional_factorial(len(chosen))
 
 

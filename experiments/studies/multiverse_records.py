@@ -41,6 +41,8 @@ import time
 import zlib
 
 from experiments.running import results
+from experiments.studies import multiverse
+from tasks.protocols import PROTOCOL_VERSION
 
 FORMAT = "ebrl-multiverse-records"
 VERSION = 1
@@ -58,8 +60,6 @@ def identity(chosen, steps):
     """What the records of one study share, and a records folder must hold one of: the
     protocol's version, the runs' steps (None: the paper's budgets), the factors and the
     chosen ones, and the design over them (its generators and universes)."""
-    from experiments.studies import multiverse
-    from tasks.protocols import PROTOCOL_VERSION
     d = multiverse.design_for(chosen)
     return {"protocol_version": PROTOCOL_VERSION, "steps": steps,
             "factors": [f.key for f in multiverse.factors()],
@@ -95,7 +95,6 @@ def digest(spec):
 
 def key(spec):
     """A run's key among the records: (setting, robot, condition, seed, steps)."""
-    from experiments.studies import multiverse
     return (multiverse.folder_key(spec.overrides), spec.label, spec.condition, spec.seed,
             spec.steps)
 

@@ -35,10 +35,14 @@ import sys
 import numpy as np
 from numba import njit
 
+import tasks
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from experiments import paper
+from experiments.commands.arguments import seeds as parse_seeds
 from experiments.outputs import verdicts
+from experiments.running.execution import seeds_for
 from experiments.studies import grid
+from tasks.robots import ROBOTS
 
 BUDGET = 30_000
 SD = 0.5          # Section 3.4
@@ -193,9 +197,6 @@ def body(seeds, task_overrides=(), steps=BUDGET, sd=SD):
     task_overrides) driven by clipped Gaussian demands until the goal or `steps`:
     {"moved", "commanded", "turned", "blocked", "first", "coverage"} over every step of
     every seed (first: steps to the goal or None per seed)."""
-    import tasks
-    from experiments.running.execution import seeds_for
-    from tasks.robots import ROBOTS
     entry = ROBOTS["two_wheel"]
     config = entry.task_config(**dict(task_overrides))
     radius = config.radius or 1.5
@@ -268,7 +269,6 @@ def wall_test(angles=(90, 60, 45, 30, 15, 5), gap=0.1, task_overrides=(), protoc
     kinematics: wall_ideal."""
     import mujoco
 
-    import tasks
     entry = tasks.resolve(robot).under(protocol)
     config = entry.task_config(**(dict(task_overrides) | {"action_noise": 0.0,
                                                           "sensor_noise": 0.0}))
@@ -344,7 +344,6 @@ def _row(record):
 
 
 def main(argv=None):
-    from experiments.commands.arguments import seeds as parse_seeds
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--seeds", type=parse_seeds, default=list(range(7000, 7100)))
     p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("walk"))

@@ -14,6 +14,7 @@ import dataclasses
 
 from tasks.actuators import OTHER_ADVICE, joints_moved, spec_kind, spec_why_other
 from tasks.mount.fields import fail
+from tasks.mount.frame import base_frame, check_rests
 from tasks.mount.records import Action
 from tasks.mount.spec import actuator, file_actuator
 
@@ -46,7 +47,6 @@ class Servos(Action):
     def edit(self, mount, spec, base, names):
         import mujoco
 
-        from tasks.mount.frame import base_frame
         site = base.add_site(name="drive")
         frame = base_frame(mount)
         if frame.robot is not None:   # its x the robot's forward, its y the robot's left
@@ -65,7 +65,6 @@ def _yaw_joint(mount, base):
     import mujoco
     import numpy as np
 
-    from tasks.mount.frame import base_frame
     rotation = base_frame(mount).rotation
     for j in base.joints:
         if j.type == mujoco.mjtJoint.mjJNT_HINGE:
@@ -95,7 +94,6 @@ def _slides(mount, base):
     import mujoco
     import numpy as np
 
-    from tasks.mount.frame import base_frame
     rotation = base_frame(mount).rotation
     out = {}
     for j in base.joints:
@@ -468,7 +466,6 @@ class Gait(Action):
                     if key != "yaw" and name not in moved:
                         fail(mount.path, field, f"no actuator of {mount.model.name} moves "
                                                 f"joint {name!r}")
-        from tasks.mount.frame import check_rests
         check_rests(mount, [name for swing, lifts, held in self.legs
                             for name in (swing, *lifts, *held)])
 

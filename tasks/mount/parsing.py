@@ -11,6 +11,7 @@ from tasks.mount.frame import FORWARDS
 from tasks.mount.kinds import KINDS
 from tasks.mount.records import Action, Beams, Bumper, Mount
 from tasks.mount.spec import BEAMS
+from tasks.readings import BY_NAME
 
 #: Joints of the base: its file's, a free joint added, slide x, slide y (and, for the
 #: two-wheel drive, hinge yaw) added in place of the base's own, or slides x, y (and z)
@@ -173,7 +174,6 @@ def _parse_action(fields, data, drive, joints) -> Action:
 def _parse_tables(fields, data, drive):
     """Mount.readings and Mount.check, from the readings and check tables."""
     fail = fields.fail
-    from tasks.readings import BY_NAME
     readings = fields.table(data.get("readings", {}), set(BY_NAME), "readings")
     for k, v in readings.items():  # each through the readings' registry (tasks.readings)
         try:

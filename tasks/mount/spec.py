@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 
+import models
 from tasks.mount import frame as frames
 from tasks.mount.fields import fail
 from tasks.mount.records import Mount
@@ -17,7 +18,6 @@ BEAMS = {"two_wheel": (7, 90.0, -30.0), "floating": (8, 0.0, 45.0)}
 
 def robot_spec(mount: Mount):
     """The robot file's MjSpec, edited as the mount says (the file itself is untouched)."""
-    import models
     spec, base = _load(mount)
     frame = frames.base_frame(mount)
     names = {}
@@ -42,7 +42,6 @@ def robot_spec(mount: Mount):
 def _robot_frame(mount, spec, base, frame):
     """The site FRAME_SITE on the base with the robot's frame (x forward, z up), where it
     is not the base's own (tasks.navigation reads the pose from it)."""
-    import models
     if frame.robot is None:
         return
     if spec.site(frames.FRAME_SITE) is not None:
@@ -55,7 +54,6 @@ def _robot_frame(mount, spec, base, frame):
 def _rest(mount, spec):
     """The rest pose (tasks.mount.frame.rest_values) of the joints the robot keeps, in the
     model's text element models.REST_TEXT (models.rest_qpos reads it)."""
-    import models
     kept = []
     for name, value in frames.rest_values(mount):
         if spec.joint(name) is None:
@@ -286,7 +284,6 @@ def _beams(mount, spec, base, beam_names, frame):
     rangefinders in the mount's order."""
     import mujoco
 
-    import models
     if mount.beams.added:
         count, first, step = BEAMS[mount.drive]
         for i in range(count):
@@ -312,7 +309,6 @@ def _beams(mount, spec, base, beam_names, frame):
 
 def _options(mount, spec):
     """The room's flags (unless the mount keeps the file's) and gravity."""
-    import models
     room = models.room_spec()
     keep = set(mount.keep_options)
     if "flags" not in keep:

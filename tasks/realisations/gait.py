@@ -43,7 +43,6 @@ module reads the legs' shares from the model and gives the episode's settings.
 """
 import math
 
-import mujoco
 import numpy as np
 
 from ebrl.readings import Range
@@ -51,7 +50,9 @@ from tasks import navigation
 from tasks.actuators import OTHER_ADVICE, control_ranges, length_gains, model_kind, \
     model_why_other
 from tasks.kernels.gait import GaitRecord
+from tasks.kernels.gait import HELD, LIFT, SWING
 from tasks.mount.frame import rest_data
+from tasks.simulator import mujoco
 from tasks.two_wheel import TwoWheel
 
 #: The gait's parameters (a mount's [action.gait] may set any of them) and defaults.
@@ -144,7 +145,6 @@ class GaitPhysics(navigation.Physics):
         drives them: a torque motor on each (PD loops), or position servos (every servo
         that moves a listed joint; their controls' change per radian measured from
         their lengths at rest)."""
-        from tasks.kernels.gait import HELD, LIFT, SWING
         if not self.legs:
             raise navigation.ContractError("the gait drive needs legs listed", field="action.legs")
         names, leg, role = [], [], []
@@ -209,7 +209,6 @@ class GaitPhysics(navigation.Physics):
         """Each leg's forward and turning shares (its swing joint's) and each lift
         joint's sign, from the kinematics at rest (the foot: the far end of the leg's
         outermost body, the first leaf below its last lift joint)."""
-        from tasks.kernels.gait import LIFT, SWING
         d = rest_data(mjm, self.rest_qpos)
         origin, rot = self.frame_at(d)   # the robot's frame: forward x, up z
         rot = rot.reshape(3, 3)

@@ -3,7 +3,6 @@
 servos or velocity servos (tasks.actuators.KINDS): the target plan on the joints'
 targets, its controller by their kind (its kernels: tasks.kernels.joint_motors,
 tasks.kernels.plan)."""
-import mujoco
 import numpy as np
 
 from tasks import navigation
@@ -11,6 +10,7 @@ from tasks.actuators import KINDS, length_gains, model_kind
 from tasks.kernels.joint_motors import JointMotorsRecord
 from tasks.mount.frame import rest_data
 from tasks.realisations.wheels import Planned
+from tasks.simulator import mujoco
 
 
 class JointMotorsPhysics(Planned):

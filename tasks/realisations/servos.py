@@ -2,11 +2,11 @@
 yaw) driven by velocity servos on its speed along the heading (``forward``), its yaw
 rate (``turn``) and, optionally, a sideways ``grip`` held at zero: the paper's
 ``two_wheel`` robot, and a mount's `servos` kind (its kernels: tasks.kernels.servos)."""
-import mujoco
 import numpy as np
 
 from tasks import navigation
 from tasks.kernels.servos import ServosRecord
+from tasks.simulator import mujoco
 
 MISSING_ACTUATORS = ("the two_wheel drive needs actuators 'forward' and 'turn' (a planar "
                      "base) or 'left_wheel' and 'right_wheel' (wheels)")

@@ -2,13 +2,13 @@
 ``thrust_x`` and ``thrust_y``, force motors along the world's x and y (on slide joints,
 or on a site with a world-fixed reference site); the paper's ``floating`` robot and a
 mount's `thrusters` kind (its kernels: tasks.kernels.thrusters)."""
-import mujoco
 import numpy as np
 
 from tasks import navigation
 from tasks.kernels import bindings, thrusters as kernels
 from tasks.kernels.thrusters import ThrustersRecord
 from tasks.readings import BY_NAME
+from tasks.simulator import mujoco
 
 #: The bump reading (tasks/readings.py), whose code the coast reads.
 BUMPS = BY_NAME["bump"]

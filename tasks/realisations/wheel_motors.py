@@ -3,12 +3,12 @@ names ``left``, ``right``) turned through the file's own torque motors (``motor_
 ``motor_1``, ...): the target plan on the wheels' angles, its PD loop solved for the
 motors' controls (the MuJoCo car, models/mounts/car.toml; its kernels:
 tasks.kernels.wheel_motors, tasks.kernels.plan)."""
-import mujoco
 
 from tasks import navigation
 from tasks.kernels.wheel_motors import WheelMotorsRecord
 from tasks.mount.kinds import MOTOR_ROLE, WHEEL_JOINTS
 from tasks.realisations.wheels import Planned, wheel_geometry
+from tasks.simulator import mujoco
 
 
 class WheelMotorsPhysics(Planned):

@@ -3,7 +3,6 @@
 ``diff_drive`` robot, and a mount's `wheels` kind; its kernels: tasks.kernels.wheels).
 `Ramped`, `Planned` and `wheel_geometry` serve the realisations whose phases ramp their
 targets (wheels; wheel_motors and joint_motors, the target plan's: tasks.kernels.plan)."""
-import mujoco
 import numpy as np
 
 from tasks import navigation
@@ -12,6 +11,7 @@ from tasks.actuators import KINDS, control_ranges, length_gains, motor_forces, \
 from tasks.kernels.plan import TORQUE, gram, hold_here
 from tasks.kernels.wheels import WheelsRecord, ramp_substeps
 from tasks.realisations.servos import MISSING_ACTUATORS
+from tasks.simulator import mujoco
 
 
 def wheel_geometry(model, joints):

@@ -55,7 +55,7 @@ def traces_name():
 
 def make_traces():
     """{key: int16 trace of STEPS + 1 positions} for every paper robot and condition."""
-    from ebrl.intrinsic import CONDITIONS
+    from ebrl.config import CONDITIONS
     from experiments.running import execution
     from tasks.robots import PAPER_ROBOTS
     out = {}
