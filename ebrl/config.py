@@ -24,17 +24,17 @@ FALLBACK_READINGS = tuple(r.name for r in readings.AGENT if r.fallback)
 
 def check_reading(name, value):
     """value if it is one of READINGS[name]'s values, else ValueError naming both."""
-    return readings.BY_NAME[name].check(value)
+    return readings.AGENT_BY_NAME[name].check(value)
 
 
 def reading_code(name, value):
     """The kernels' int for a reading: its index in READINGS[name] (0 = the default)."""
-    return readings.BY_NAME[name].code(value)
+    return readings.AGENT_BY_NAME[name].code(value)
 
 
 def _default(name):
     """A reading field's default: its registry entry's (ebrl.readings)."""
-    return readings.BY_NAME[name].default
+    return readings.AGENT_BY_NAME[name].default
 
 
 @dataclasses.dataclass(frozen=True)

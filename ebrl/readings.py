@@ -211,12 +211,12 @@ AGENT = (
             paper='Section 2.3: "it should sometimes do a type of exploration behavior '
                   'ignoring the above decision process"'),
 )
-BY_NAME = {r.name: r for r in AGENT}
+AGENT_BY_NAME = {r.name: r for r in AGENT}
 
 
 def codes(name, *values):
     """The codes (Reading.code) of an agent switch's values, in the order asked: what a
     kernel module names its switch constants by (``EQ7_WHOLE, EQ7_CUT = codes("eq7_walk",
     "whole", "cut")``), so they follow the registry, never a position kept by hand."""
-    reading = BY_NAME[name]
+    reading = AGENT_BY_NAME[name]
     return reading.code(values[0]) if len(values) == 1 else tuple(map(reading.code, values))

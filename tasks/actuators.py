@@ -3,7 +3,7 @@ realisations on a file's own actuators (tasks.realisations: wheel_motors, joint_
 gait) and the mount kinds that check a file before it is loaded (tasks.mount.kinds).
 
 - `kind`: an actuator's kind by its gain, bias and activation dynamics (not by its
-  element's name): a torque motor, a position servo or a velocity servo (KINDS), or None
+  element's name): a torque motor, a position servo or a velocity servo (ACTUATOR_KINDS), or None
   (`why_other`: the term, gain, bias or dyn, that makes it none of them). `model_kind`
   reads a compiled model's actuator, `spec_kind` an MjSpec's (and `model_why_other`,
   `spec_why_other`).
@@ -14,21 +14,21 @@ gait) and the mount kinds that check a file before it is loaded (tasks.mount.kin
 - `require_independent`: the refusal of motors that cannot move two joints apart.
 
 Nothing heavy is imported at the top: the mount parser uses this module before MuJoCo is
-needed, and the kernels read KINDS.
+needed, and the kernels read ACTUATOR_KINDS.
 """
 import numpy as np
 from models import ContractError
 
 #: The actuators' kinds a controller knows, as the docs and errors write them (their
 #: index is the joint_motors controller's code: tasks.kernels.joint_motors).
-KINDS = ("torque motors", "position servos", "velocity servos")
+ACTUATOR_KINDS = ("torque motors", "position servos", "velocity servos")
 #: The control each motor is probed with at load, to measure its generalised force per
 #: unit control (small, so no joint's actuatorfrcrange clips it).
 PROBE = 1e-3
 
 
 def kind(gaintype, gainprm, biastype, biasprm, dyntype):
-    """An actuator's kind (KINDS) from its parameters, None for another (`why_other`
+    """An actuator's kind (ACTUATOR_KINDS) from its parameters, None for another (`why_other`
     says which term makes it so):
     - a torque motor (MuJoCo's <motor>, or a <general> whose affine bias is all zeros):
       a fixed gain, no bias, no activation dynamics;
@@ -41,7 +41,7 @@ def kind(gaintype, gainprm, biastype, biasprm, dyntype):
 
 def why_other(gaintype, gainprm, biastype, biasprm, dyntype):
     """For an actuator of no kind (kind is None), the term that makes it so (gain, bias
-    or dyn) and its value, in a few words; None for one of KINDS."""
+    or dyn) and its value, in a few words; None for one of ACTUATOR_KINDS."""
     return _classify(gaintype, gainprm, biastype, biasprm, dyntype)[1]
 
 
@@ -58,21 +58,21 @@ def _classify(gaintype, gainprm, biastype, biasprm, dyntype):
             and biasprm[0] == biasprm[1] == biasprm[2] == 0.0):
         if gain == 0.0:
             return None, "gain: 0 (its control moves nothing)"
-        return (KINDS[0], None) if none else (None, f"{dyn} (a torque motor's force would "
+        return (ACTUATOR_KINDS[0], None) if none else (None, f"{dyn} (a torque motor's force would "
                                                     "lag its control)")
     if int(biastype) != int(mujoco.mjtBias.mjBIAS_AFFINE):
         return None, f"bias: biastype {mujoco.mjtBias(int(biastype)).name[7:].lower()}"
     if biasprm[0] != 0.0:
         return None, f"bias: a constant term (biasprm[0] = {biasprm[0]:g})"
     if biasprm[1] == -gain != 0.0:
-        return KINDS[1], None
+        return ACTUATOR_KINDS[1], None
     if biasprm[1] != 0.0:
         return None, (f"bias: its length term (biasprm[1] = {biasprm[1]:g}) is not -gain "
                       f"({-gain:g}), so its control is no length it holds")
     if biasprm[2] != -gain or gain == 0.0:
         return None, (f"bias: its speed term (biasprm[2] = {biasprm[2]:g}) is not -gain "
                       f"({-gain:g}), so its control is no speed it holds")
-    return (KINDS[2], None) if none else (None, f"{dyn} (a velocity servo's force would "
+    return (ACTUATOR_KINDS[2], None) if none else (None, f"{dyn} (a velocity servo's force would "
                                                 "lag its control)")
 
 

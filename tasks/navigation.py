@@ -180,7 +180,7 @@ class Physics(dm_mujoco.Physics):
         self.n_beams = len(adr)
 
     #: The realisation's record class (an ebrl.records.Record of BODY_FIELDS and its own:
-    #: tasks.kernels.steps.REALISATIONS).
+    #: tasks.kernels.steps.DISPATCH).
     Record = None
 
     def phase_settings(self, n_turn, n_move):
@@ -390,14 +390,14 @@ class Navigation(control.Task):
 
     def action_array(self, action):
         """The action as a fresh float64 array of shape (action_dim,) (a scalar for a
-        one-part action), clipped to [-1, 1] (tasks.kernels.body.clip_unit, which the
+        one-part action), clipped to [-1, 1] (tasks.kernels.body.clip_finite, which the
         step runs again); ValueError for another shape, NaN or inf, before any draw."""
         a = np.array(action, dtype=np.float64)
         if a.shape != (self.action_dim,):
             if not (a.ndim == 0 and self.action_dim == 1):
                 raise ValueError(f"action must have shape ({self.action_dim},), got {a.shape}")
             a = a.reshape(1)
-        if not body.clip_unit(a):
+        if not body.clip_finite(a):
             raise ValueError(f"action must be finite, got {a.tolist()}")  # nothing clipped
         return a
 

@@ -82,7 +82,7 @@ def test_every_config_reading_field_takes_its_default_from_the_registry():
             assert fields[r.name].default == r.default or \
                 (r.default is None and fields[r.name].default is None), r.name
             assert fields[r.name].type is (str if r.switch else float), r.name
-    assert not set(agent_registry.BY_NAME) & {f.name for f in dataclasses.fields(TaskConfig)}
+    assert not set(agent_registry.AGENT_BY_NAME) & {f.name for f in dataclasses.fields(TaskConfig)}
     assert list(registry.BY_NAME) == [r.name for r in registry.EVERY]  # no name twice
 
 

@@ -12,7 +12,7 @@ The mirror of ebrl/kernels.py for the simulator side, one module per job:
 | `servos`, `wheels`, `wheel_motors`, `joint_motors`, `gait` | the family's realisations |
 | `plan` | the target plan and its controller (wheel_motors', joint_motors') |
 | `thrusters` | the floating drive's realisation and step |
-| `steps` | the realisations' table; the entry points `step` (an agent step), `observe` |
+| `steps` | the dispatch table (`DISPATCH`); the entry points `step` (an agent step), `observe` |
 
 Each realisation's record is an ebrl.records.Record of named fields (`<Name>Record` in
 the module of its name: tasks.realisations); tasks.navigation.Physics builds it. The

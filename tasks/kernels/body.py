@@ -73,10 +73,10 @@ def sense(s, noise):
 
 
 @njit(cache=True)
-def clip_unit(a):
-    """The action's parts clipped to [-1, 1] in place (ebrl.kernels.clip_unit, the one
-    clip: as Python's min(max(v, -1), 1) for any finite v); NaN and inf are refused
-    (returns False, nothing clipped)."""
+def clip_finite(a):
+    """A finite action's parts clipped to [-1, 1] in place (ebrl.kernels.clip_unit, the one
+    clip: as Python's min(max(v, -1), 1) for any finite v), returning True; NaN and inf are
+    refused (returns False, nothing clipped)."""
     for i in range(a.shape[0]):
         if not math.isfinite(a[i]):
             return False

@@ -8,7 +8,7 @@ A phase of n substeps (`aim`, then `phase`) moves the two targets by (left, righ
 its first `ramp` substeps (tasks.kernels.wheels.ramp_substeps), then lets them settle;
 the halt puts the targets where the joints are (`hold_here`), so a stalled joint gives
 up the rest. At every substep the controller (`controls`) turns the targets into the
-actuators' controls, by the actuators' kind (tasks.actuators.KINDS):
+actuators' controls, by the actuators' kind (tasks.actuators.ACTUATOR_KINDS):
 
 - TORQUE (motors): the PD torques tau = kp (target - q) - kv dq, and the motors'
   controls of least norm that give them (`motor_controls`, over the motors' forces
@@ -25,12 +25,12 @@ import numpy as np
 from numba import njit
 
 from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
-from tasks.actuators import KINDS
+from tasks.actuators import ACTUATOR_KINDS
 from tasks.kernels import bindings, two_wheel as family
 
 #: The controllers, by the kind of the actuators on the joints (the code is the kind's
-#: index in tasks.actuators.KINDS).
-TORQUE, POSITION, VELOCITY = (KINDS.index(k) for k in ("torque motors", "position servos",
+#: index in tasks.actuators.ACTUATOR_KINDS).
+TORQUE, POSITION, VELOCITY = (ACTUATOR_KINDS.index(k) for k in ("torque motors", "position servos",
                                                        "velocity servos"))
 
 #: The plan's fields of a record:

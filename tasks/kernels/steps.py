@@ -2,7 +2,7 @@
 loop call, and the one table that says which kernels each realisation runs.
 
 An agent step (`step`), read top to bottom: the action checked and clipped
-(body.clip_unit); the realisation's action (`action`: REALISATIONS below); the robot
+(body.clip_finite); the realisation's action (`action`: DISPATCH below); the robot
 still in the room (body.in_room: else the status OUTSIDE, a failed run); the goal test
 (body.goal_reached); the observation (`observe`: Section 3.2's range codes and, for a
 drive that senses it, the velocity). Everything that runs it runs this one function: the
@@ -11,7 +11,7 @@ back by after_step and get_observation), tasks.Environment's compiled step and t
 protocol's compiled loop (experiments.running.fused). `observe` alone is an episode's
 first observation.
 
-REALISATIONS is the dispatch: each realisation's record type, its action and its
+DISPATCH is the dispatch table: each realisation's record type, its action and its
 velocity reading, by name (the names of tasks.realisations and of the mounts' action
 kinds). A two-wheel realisation's action is the family's step
 (tasks.kernels.two_wheel.act) on the realisation's own phases, passed to it as
@@ -78,9 +78,9 @@ def thrusters_velocity(s, vel, noise):
     vel[:] = thrusters.velocity_reading(s, v, noise)
 
 
-#: The realisations: name -> (record, action(s, action, u) -> (status, substeps),
+#: The dispatch, by realisation: name -> (record, action(s, action, u) -> (status, substeps),
 #: velocity(s, vel, noise)).
-REALISATIONS = {
+DISPATCH = {
     "servos": (servos.ServosRecord, servos_action, no_velocity),
     "wheels": (wheels.WheelsRecord, wheels_action, no_velocity),
     "wheel_motors": (wheel_motors.WheelMotorsRecord, wheel_motors_action, no_velocity),
@@ -91,8 +91,8 @@ REALISATIONS = {
 
 
 def _row(s):
-    """REALISATIONS' row of the record type s (numba's type, at compile time)."""
-    for record, act, velocity in REALISATIONS.values():
+    """DISPATCH' row of the record type s (numba's type, at compile time)."""
+    for record, act, velocity in DISPATCH.values():
         if isinstance(s, record.numba_type):
             return act, velocity
     return None
@@ -100,7 +100,7 @@ def _row(s):
 
 def action(s, a, u):
     """The realisation's action for the clipped action a and the noise's draws u: its
-    REALISATIONS row's; returns (status, substeps). Compiled code only."""
+    DISPATCH row's; returns (status, substeps). Compiled code only."""
     raise TypeError("tasks.kernels.steps.action runs in compiled code (step)")
 
 
@@ -113,7 +113,7 @@ def _action(s, a, u):
 
 
 def velocity(s, vel, noise):
-    """The realisation's velocity reading into vel: its REALISATIONS row's. Compiled code
+    """The realisation's velocity reading into vel: its DISPATCH row's. Compiled code
     only."""
     raise TypeError("tasks.kernels.steps.velocity runs in compiled code (observe, step)")
 
@@ -141,7 +141,7 @@ def step(s, a, u, noise, velocity_noise, codes, vel):
     """One agent step of the record's realisation on a finite action (clipped in place):
     the range codes into codes and, floating, the velocity into vel. Returns (status,
     substeps run, in the goal)."""
-    if not body.clip_unit(a):
+    if not body.clip_finite(a):
         return bindings.NOT_FINITE, 0, False
     status, n = action(s, a, u)
     if status != bindings.OK:

@@ -1,12 +1,12 @@
 """The joint_motors realisation of the two-wheel family: a mount's forward and turn joints
 (the file's names) under the file's own actuators on them, all torque motors, position
-servos or velocity servos (tasks.actuators.KINDS): the target plan on the joints'
+servos or velocity servos (tasks.actuators.ACTUATOR_KINDS): the target plan on the joints'
 targets, its controller by their kind (its kernels: tasks.kernels.joint_motors,
 tasks.kernels.plan)."""
 import numpy as np
 
 from tasks import navigation
-from tasks.actuators import KINDS, length_gains, model_kind
+from tasks.actuators import ACTUATOR_KINDS, length_gains, model_kind
 from tasks.kernels.joint_motors import JointMotorsRecord
 from tasks.mount.frame import rest_data
 from tasks.realisations.wheels import Planned
@@ -35,7 +35,7 @@ class JointMotorsPhysics(Planned):
         if len(kinds) != 1 or None in kinds:
             raise navigation.ContractError(
                 f"joint motors need the joints {list(self.joints)} moved by actuators of one "
-                f"kind: {', '.join(KINDS)}", field="action.kind")
+                f"kind: {', '.join(ACTUATOR_KINDS)}", field="action.kind")
         forward = ids[0]
         if int(mjm.jnt_type[forward]) == int(mujoco.mjtJoint.mjJNT_HINGE):
             # a wheel: its body's first geom's radius

@@ -6,7 +6,7 @@ targets (wheels; wheel_motors and joint_motors, the target plan's: tasks.kernels
 import numpy as np
 
 from tasks import navigation
-from tasks.actuators import KINDS, control_ranges, length_gains, motor_forces, \
+from tasks.actuators import ACTUATOR_KINDS, control_ranges, length_gains, motor_forces, \
     require_independent
 from tasks.kernels.plan import TORQUE, gram, hold_here
 from tasks.kernels.wheels import WheelsRecord, ramp_substeps
@@ -42,13 +42,13 @@ class Planned(Ramped):
 
     def plan_parts(self, joints, motors, kind, field):
         """The plan's fields for the two joints (ids) moved by the actuators `motors` (ids)
-        of one kind (tasks.actuators.KINDS); `field`: the mount's field the refusal of
+        of one kind (tasks.actuators.ACTUATOR_KINDS); `field`: the mount's field the refusal of
         motors that cannot move the joints apart names."""
         mjm = self.model.ptr
         q = mjm.jnt_qposadr[joints].astype(np.int64)
         dof = mjm.jnt_dofadr[joints].astype(np.int64)
         motors = np.asarray(motors, dtype=np.int64)
-        mode = KINDS.index(kind)
+        mode = ACTUATOR_KINDS.index(kind)
         gain, lengths = length_gains(mjm, q, self.rest_qpos)
         forces = (motor_forces(mjm, motors, dof, self.rest_qpos) if mode == TORQUE
                   else np.zeros((len(motors), 2)))
