@@ -69,8 +69,9 @@ def test_a_stretch_is_the_step_by_step_loop(robot, steps, condition):
 @pytest.mark.slow
 def test_runs_are_the_same_fused_or_not_and_reach_the_goal():
     for robot, condition, seed, steps in (("two_wheel", "avoidance", 1, 12_000),
-                                          ("floating", "random", 7016, 8000)):
-        # floating random seed 7016 (protocol 7's fit seeds): goals at 1,997, 4,065, 4,855
+                                          ("floating", "random", 7004, 8000)):
+        # floating random seed 7004 (protocol 7's fit seeds): goals at 904, 3,293, 6,205 and
+        # 7,957 under protocol 8 (threshold 0.2)
         spec = execution.RunSpec(robot, condition, seed, steps)
         a, b = execution.execute(spec, fused=False), execution.execute(spec)
         assert len(a["trial_ends"]) >= 3, (robot, condition)

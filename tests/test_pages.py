@@ -69,7 +69,9 @@ def test_the_editor_changes_nothing_outside_its_own_block(fragments, body):
         return
     out = page.edited(text, BEGIN, END, lines, "P.md")
     prefix, suffix = expected
-    newline = "\r\n" if "\r\n" in text else "\n"
+    outside = prefix + (suffix or "")
+    newline = "\r\n" if "\r\n" in outside or (suffix is None and prefix.endswith("\r")) \
+        else "\n"
     assert out.startswith(prefix) and out.endswith(suffix or "")
     assert newline.join(lines) in out[len(prefix):]
     again = page.edited(out, BEGIN, END, lines, "P.md")  # a second edit: the same page

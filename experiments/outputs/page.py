@@ -94,9 +94,14 @@ def edited(text, begin, end, lines, where="the page"):
     lines = list(lines)
     if lines[:1] != [begin] or lines[-1:] != [end]:
         raise ValueError("a block's lines start with its start marker and end with its end")
-    newline = "\r\n" if "\r\n" in text else "\n"
-    body = newline.join(lines)
     span = find(text, begin, end, where)
+    # the page's own line ends, from the text outside the block (the block is ours)
+    outside = text if span is None else text[:span[0]] + text[span[1]:]
+    # (a page that ends in a bare CR, the block appended after it, gets CRLF: the CR and
+    # the appended LF make one)
+    crlf = "\r\n" in outside or (span is None and outside.endswith("\r"))
+    newline = "\r\n" if crlf else "\n"
+    body = newline.join(lines)
     if span is not None:
         return text[:span[0]] + body + text[span[1]:]
     gap = ("" if not text or text.endswith(2 * newline)
