@@ -229,9 +229,9 @@ def test_a_first_trial_study_runs_and_validates(tmp_path):
     s = optuna.load_study(study_name="first_trial_two_wheel",
                           storage=study.storage_url(None, out))
     (trial,) = s.trials
-    # trial 0: the robot's own readings (protocol 7's, tasks.robots)
+    # trial 0: the robot's own readings (the adopted protocol's, tasks.robots)
     assert trial.params == {"random_demand": "gaussian", "random_in_avoidance": "replace",
-                            "blocked_move": "refuse", "leftover_turn": "commanded",
+                            "leftover_turn": "commanded",
                             "radius": dict(tasks.robots.ROBOTS["two_wheel"].readings)["radius"]}
     rung = trial.user_attrs["rungs"][0]
     assert rung["seeds"] == list(range(64))

@@ -9,7 +9,8 @@ budget, through the one study runner (experiments.studies.study) that `ebrl fit`
 `ebrl evolve` share.
 
 The space (SPACES) is per drive: the readings that can change a first trial, the ones
-item 2 of issue 29 added (random_demand, blocked_move, leftover_turn), the body's
+item 2 of issue 29 added (random_demand, leftover_turn; blocked_move left it with
+protocol 8, being stated), the body's
 (radius; the floating bump, restitution, wall friction), the floating drive's action
 noise (the paper gives the two-wheel robot's 5% only) and the fallback's switches.
 Table 1, the room, the sensors and the actions' maxima stay fixed. The objective is
@@ -50,7 +51,8 @@ _FALLBACK = (_param("random_demand"), _param("random_in_avoidance"))
 #: to the ablation's largest, as `ebrl fit`'s).
 SPACES = {
     "two_wheel": _FALLBACK + (
-        _param("blocked_move"),
+        # (not blocked_move: Section 3.3 states it, a move stopped at the touch, since
+        # protocol 8 on the body itself)
         _param("leftover_turn"),
         _param("radius", (1.0, 2.5)),
     ),
