@@ -189,8 +189,9 @@ def move(s, distance):
     chunk = s.feedback_seconds
     t, done = 0.0, 0.0
     n = 0
+    watch = not family.clear_ahead(s, h0, distance)
     while distance - done > s.coast and t < s.max_move_seconds:
-        if family.touching(s, h0):  # Section 3.3: the move ends where the body touches
+        if watch and family.touching(s, h0):  # Section 3.3: the move ends at the touch
             break
         err = remainder(h0 - heading(s), 2 * math.pi)
         r = (distance - done) / s.slow_down

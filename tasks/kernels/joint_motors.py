@@ -42,4 +42,5 @@ def move(s, distance):
     """Moves `distance` units forward over the move phase, ending where the body touches
     the room."""
     aim(s, distance * s.joint_per_unit, 0.0, s.ramp_move)
-    return phase(s, s.n_move, base_pose(s)[2], True)
+    heading = base_pose(s)[2]
+    return phase(s, s.n_move, heading, not family.clear_ahead(s, heading, distance))

@@ -47,8 +47,11 @@ def move(s, distance):
     substeps run)."""
     n = s.n_move
     speed = distance / (n * s.timestep)
-    per = speed * s.timestep
     _, _, heading = base_pose(s)
+    if family.clear_ahead(s, heading, distance):  # the whole phase at once
+        drive(s, speed, 0.0)
+        return step_phase(s, n), n
+    per = speed * s.timestep
     for k in range(n):
         ahead = family.room_ahead(s, heading, 2 * per)
         if ahead <= family.TOUCH:

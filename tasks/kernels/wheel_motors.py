@@ -39,4 +39,5 @@ def move(s, distance):
     where the body touches the room."""
     left, right = move_angles(s, distance)
     aim(s, left, right, s.ramp_move)
-    return phase(s, s.n_move, base_pose(s)[2], True)
+    heading = base_pose(s)[2]
+    return phase(s, s.n_move, heading, not family.clear_ahead(s, heading, distance))

@@ -95,7 +95,8 @@ def move(s, distance):
     the room."""
     left, right = move_angles(s, distance)
     _, _, heading = base_pose(s)
-    return phase(s, left, right, s.n_move, s.ramp_move, heading, True)
+    return phase(s, left, right, s.n_move, s.ramp_move, heading,
+                 not family.clear_ahead(s, heading, distance))
 
 
 @njit(cache=True)
