@@ -115,9 +115,57 @@ def _content(path, mtime, size):
         return hashlib.sha256(f.read()).hexdigest()
 
 
+def _bound(statements, names):
+    """Adds to `names` what `statements` bind at their level (imports, definitions,
+    assignments), into compound statements but not into functions and classes; False
+    where a star import binds what the text does not name."""
+    import ast
+    for node in statements:
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            names.add(node.name)
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            for alias in node.names:
+                if alias.name == "*":
+                    return False
+                names.add(alias.asname or alias.name.split(".")[0])
+        elif isinstance(node, (ast.Assign, ast.AnnAssign, ast.AugAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            names.update(n.id for t in targets for n in ast.walk(t) if isinstance(n, ast.Name))
+        else:
+            for field in ("body", "orelse", "finalbody", "handlers"):
+                if not _bound(getattr(node, field, ()) or (), names):
+                    return False
+    return True
+
+
+@functools.lru_cache(maxsize=None)
+def _package_names(path, mtime, size):
+    """The names a package's __init__.py binds itself, or None (a star import)."""
+    import ast
+    with open(path, "rb") as f:
+        names = set()
+        return frozenset(names) if _bound(ast.parse(f.read()).body, names) else None
+
+
+def _own_names(module):
+    """A module's globals as its import leaves them whatever else was imported: a
+    package's without the submodules that the import system binds in it when a submodule
+    is imported (by anyone, later; its own imports' bindings kept), so a kernel's stamp is
+    the same in every process (otherwise a process that imported one more submodule, or
+    one fewer, saved a different stamp and the next process compiled the kernel again)."""
+    namespace = vars(module)
+    path = getattr(module, "__file__", None)
+    if not hasattr(module, "__path__") or not path:
+        return namespace
+    st = os.stat(path)
+    names = _package_names(path, st.st_mtime, st.st_size)
+    return namespace if names is None else {k: v for k, v in namespace.items() if k in names}
+
+
 def reached(namespace, own_file):
     """The tracked source files, other than own_file, that a module with globals
-    `namespace` reaches through its globals, transitively (sorted)."""
+    `namespace` reaches through its globals, transitively (sorted): the same files
+    whatever the process has imported (_own_names)."""
     modules = {getattr(m, "__file__", None): m for m in list(sys.modules.values())}
     own = _realpath(own_file)
     seen, todo = {own}, [namespace]
@@ -128,7 +176,7 @@ def reached(namespace, own_file):
                 continue
             seen.add(real)
             if path in modules:
-                todo.append(vars(modules[path]))
+                todo.append(_own_names(modules[path]))
     return sorted(seen - {own})
 
 

@@ -76,6 +76,67 @@ def test_the_stamp_names_the_files_a_module_reaches():
             "kernels/two_wheel.py", "kernels/thrusters.py"} <= names
 
 
+PACKAGE_MAIN = textwrap.dedent("""\
+    import sys
+    if sys.argv[1:]:
+        import pkg.other  # binds `other` in pkg before caller's kernel is decorated
+    import caller
+    print(caller.g(2.0), caller.g.stats.cache_hits.get(caller.g.signatures[0], 0))
+    """)
+
+
+def test_a_kernels_stamp_is_the_same_whatever_else_the_process_imported(tmp_path):
+    """A package's globals gain each submodule anyone imports: were they followed, a
+    process that imported one more (another command, a test) saved another stamp, and the
+    next process compiled the kernel again (measured: the loop, 10 s, in half the tests'
+    processes). Here a kernel reaching a package through its module's globals is loaded
+    from the cache by a process that imported another submodule of the package, and
+    still compiled again when a file it reaches changes."""
+    (tmp_path / "pkg").mkdir()
+    (tmp_path / "pkg" / "__init__.py").write_text("from pkg.callee import f\n")
+    (tmp_path / "pkg" / "callee.py").write_text(CALLEE.format(scale=3.0))
+    (tmp_path / "pkg" / "other.py").write_text("X = 1\n")
+    (tmp_path / "caller.py").write_text(CALLER.replace("import callee", "import pkg")
+                                        .replace("callee.f", "pkg.f")
+                                        .format(install="import ebrl.compiled  # noqa: F401"))
+    (tmp_path / "main.py").write_text(PACKAGE_MAIN)
+
+    def run(*other):
+        out = subprocess.run([sys.executable, "main.py", *other], cwd=tmp_path,
+                             capture_output=True, text=True, check=True).stdout.split()
+        return float(out[0]), int(out[1])
+
+    assert run() == (7.0, 0)
+    assert run("other") == (7.0, 1)  # another submodule imported: the same stamp
+    assert run() == (7.0, 1)
+    (tmp_path / "pkg" / "callee.py").write_text(CALLEE.format(scale=10.0))
+    assert run("other") == (21.0, 0)
+
+
+def test_no_kernel_reaches_a_submodule_through_its_package():
+    """What the stamp leaves out (a package's submodules that its __init__ does not bind
+    itself) no cached kernel reads: no jitted function names `package.submodule`."""
+    import ast
+    import importlib
+    from helpers import ROOT
+    from ebrl import compiled
+    found = []
+    for name, rel in _cached_kernel_modules().items():
+        module = importlib.import_module(name)
+        tree = ast.parse((ROOT / rel).read_text())
+        for node in ast.walk(tree):
+            if not (isinstance(node, ast.FunctionDef) and any(
+                    "njit" in ast.unparse(d) for d in node.decorator_list)):
+                continue
+            for attr in ast.walk(node):
+                if isinstance(attr, ast.Attribute) and isinstance(attr.value, ast.Name):
+                    package = vars(module).get(attr.value.id)
+                    if (hasattr(package, "__path__") and compiled._tracked(package.__file__)
+                            and attr.attr not in compiled._own_names(package)):
+                        found.append(f"{rel}: {node.name}: {attr.value.id}.{attr.attr}")
+    assert found == []
+
+
 def _cached_kernel_modules():
     """{module name: path} of the checkout's modules that define a cached kernel."""
     from helpers import ROOT
