@@ -146,14 +146,14 @@ def test_bad_records_stop_the_command_before_any_work(tmp_path, bad):
 @pytest.mark.slow
 def test_a_study_resumes_from_its_records_on_a_fresh_folder(tmp_path):
     whole, part, fresh = tmp_path / "whole", tmp_path / "part", tmp_path / "fresh"
-    assert ebrl_here("multiverse", "--universes", "3", *TINY, "--out", whole).returncode == 0
+    assert ebrl_here("multiverse", "--universes", "2", *TINY, "--out", whole).returncode == 0
     table = (whole / "multiverse.csv").read_bytes()
     runs = sorted(whole.glob("runs/*/*/*/seed_*/run.json"))
     # another machine made the first universe; its records alone come here
     assert ebrl_here("multiverse", "--universes", "1", *TINY, "--out", part).returncode == 0
     shutil.copytree(part / "records", fresh / "records")
     done = len(list(part.glob("runs/*/*/*/seed_*/run.json")))
-    proc = ebrl_here("multiverse", "--universes", "3", *TINY, "--out", fresh)
+    proc = ebrl_here("multiverse", "--universes", "2", *TINY, "--out", fresh)
     assert proc.returncode == 0, proc.stderr
     assert (fresh / "multiverse.csv").read_bytes() == table  # bit for bit
     made = list(fresh.glob("runs/*/*/*/seed_*/run.json"))  # no recorded run made again
@@ -164,12 +164,12 @@ def test_a_study_resumes_from_its_records_on_a_fresh_folder(tmp_path):
         [done, len(runs) - done]
     # a rerun makes nothing and writes no shard
     shards = sorted((fresh / "records").iterdir())
-    assert ebrl_here("multiverse", "--universes", "3", *TINY, "--out", fresh).returncode == 0
+    assert ebrl_here("multiverse", "--universes", "2", *TINY, "--out", fresh).returncode == 0
     assert sorted((fresh / "records").iterdir()) == shards
     # run folders without records (made before records were kept, or killed between the
     # two) give their records: no run made
     shutil.rmtree(whole / "records")
-    assert ebrl_here("multiverse", "--universes", "3", *TINY, "--out", whole).returncode == 0
+    assert ebrl_here("multiverse", "--universes", "2", *TINY, "--out", whole).returncode == 0
     rebuilt = records.Store(whole / "records", ident)
     def made(record):  # what a run made, not when or in how long
         return {k: v for k, v in record.items() if k not in ("at", "seconds")}
@@ -179,7 +179,7 @@ def test_a_study_resumes_from_its_records_on_a_fresh_folder(tmp_path):
     assert [s["runs_made"] for s in rebuilt.timing()] == [0]
     assert (whole / "multiverse.csv").read_bytes() == table
     # the report from the records alone (a fresh clone's committed records), no run made
-    proc = ebrl_here("multiverse", "--universes", "3", "--seeds", "0-1", "--steps", "1500",
+    proc = ebrl_here("multiverse", "--universes", "2", "--seeds", "0-1", "--steps", "1500",
                      "--report-only", "--records", fresh / "records", "--out", tmp_path / "r")
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "r" / "multiverse.csv").read_bytes() == table
