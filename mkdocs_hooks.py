@@ -64,7 +64,7 @@ def site_path(path, config):
 
 
 def _targets(markdown):
-    """(line number, match) of every inline link outside fenced code blocks."""
+    """(line number, line) of every line outside fenced code blocks."""
     fenced = False
     for number, line in enumerate(markdown.splitlines(keepends=True)):
         if FENCE.match(line):
