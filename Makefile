@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 DEMO_OUT ?= demo_results
 
-.PHONY: demo lint test test-fast bench clean lock
+.PHONY: demo lint test test-fast bench clean lock docs
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -68,8 +68,15 @@ test: lint $(VENV)/.installed-test
 test-fast: lint $(VENV)/.installed-test
 	$(BIN)/python -m pytest -q -n 2 -m "not slow" --durations=5
 
+# The docs site (mkdocs.yml): docs/, with the README as its home page and RESULTS.md,
+# EVOLVE.md and CHANGELOG.md beside it, and an API page from the docstrings, built into
+# site/ with --strict: a broken link or anchor, or a page missing from the nav, fails it
+# (make test builds it too: tests/test_docs_site.py). MkDocs is in the test extra's lock.
+docs: $(VENV)/.installed-test
+	$(BIN)/mkdocs build --strict
+
 bench: $(VENV)/.installed
 	$(BIN)/ebrl bench
 
 clean:
-	rm -rf $(VENV) $(DEMO_OUT) .pytest_cache
+	rm -rf $(VENV) $(DEMO_OUT) .pytest_cache site

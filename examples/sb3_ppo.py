@@ -1,11 +1,11 @@
-"""Stable-Baselines3's PPO on EBRL/TwoWheel-v0: trains through SubprocVecEnv, evaluates,
+"""Stable-Baselines3's PPO on EBRL/TwoWheel-v1: trains through SubprocVecEnv, evaluates,
 then renders one episode to an MP4.
 
     pip install -e '.[sb3]'        # stable-baselines3 and torch (a CPU build is enough)
     python examples/sb3_ppo.py --timesteps 20000 --out ppo_two_wheel.mp4
 
 The workers are started with spawn and get the id in its module form,
-"tasks.gym:EBRL/TwoWheel-v0", so Gymnasium imports tasks.gym in each of them (Gymnasium
+"tasks.gym:EBRL/TwoWheel-v1", so Gymnasium imports tasks.gym in each of them (Gymnasium
 1.x loads no plugins by itself). No process loads an OpenGL library until it renders a
 frame (tasks.render), so torch and MuJoCo share a process safely; only this process
 renders, after training. The reward is the paper's: 1 at the goal, 0 elsewhere, so a
@@ -14,7 +14,7 @@ short training reaches the goal rarely; the point here is the plumbing.
 import argparse
 import sys
 
-ENV_ID = "tasks.gym:EBRL/TwoWheel-v0"
+ENV_ID = "tasks.gym:EBRL/TwoWheel-v1"
 
 
 def parse(argv):

@@ -1,18 +1,25 @@
 """Gymnasium environments for every registered robot, one id each, registered in one loop.
 
     import gymnasium, tasks.gym
-    env = gymnasium.make("EBRL/TwoWheel-v0", render_mode="rgb_array")   # or DiffDrive, ...
+    env = gymnasium.make("EBRL/TwoWheel-v1", render_mode="rgb_array")   # or DiffDrive, ...
     obs, info = env.reset(seed=0)
     obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
 
 An id is known in a process that imported this module. Gymnasium (1.0 on) no longer
 loads plugins at import, so a process that did not, a worker of a vector environment
-started with spawn or forkserver say, finds it through `"tasks.gym:EBRL/TwoWheel-v0"`:
+started with spawn or forkserver say, finds it through `"tasks.gym:EBRL/TwoWheel-v1"`:
 `gymnasium.make` imports the module before the id, and registering again is harmless.
 Options of
 `tasks.load` pass through: `room` (models.rooms: "medium", "random:21x21:3", a map file),
 any field of tasks.TaskConfig (`sensor_noise`, `action_noise`, `start_jitter`, `bump`,
 ...); and `max_episode_steps` (default: the robot's budget of Section 3.6).
+
+An id's version names its dynamics, as Gymnasium's own ids do: `VERSION` (v1) is
+protocol 8's (tasks.protocols.PROTOCOL_VERSION; `VERSIONS` says what each version is).
+An older version stays registered (`DEPRECATED`): `gymnasium.make` of it warns
+(DeprecationWarning) and makes the current version's environment, the only one the code
+can make. docs/environments/ has a page per id, written from this registry by
+experiments.outputs.gym_pages.
 
 A thin adapter of our dm_env tasks rather than Shimmy's dm_control converter: reset(seed)
 must reseed the task's own random stream (start jitter, sensor and action noise) to
@@ -28,6 +35,8 @@ and with bump="bounce" a wall takes no speed away), so no finite bound holds for
 run. Rendering makes its OpenGL context at the first frame (tasks.render), so an
 environment that never renders loads no OpenGL library.
 """
+import warnings
+
 import gymnasium
 import numpy as np
 from gymnasium import spaces
@@ -37,15 +46,29 @@ from tasks.navigation import SENSOR_LEVELS
 from tasks.robots import ROBOTS
 
 NAMESPACE = "EBRL"
-VERSION = 0
+#: The current version of every id: the dynamics it makes.
+VERSION = 1
+#: Each version, what it makes (docs/environments/'s version history).
+VERSIONS = {
+    1: "protocol 8's dynamics (tasks.protocols.PROTOCOL_VERSION 8)",
+    0: "the first id, registered on 2026-11-23 under protocol 2; its environment followed "
+       "the protocols' bodies and task readings up to protocol 8 without a new version",
+}
+#: The older versions, each still registered: it warns and makes VERSION's environment.
+DEPRECATED = (0,)
 RENDER_SIZE = (480, 640)  # height, width of render_mode="rgb_array"
 #: The observations' bounds by key; a key not here is unbounded (see above).
 OBSERVATION_BOUNDS = {"range": (0.0, float(SENSOR_LEVELS))}
 
 
-def env_id(robot):
-    """'two_wheel' -> 'EBRL/TwoWheel-v0'."""
-    return f"{NAMESPACE}/{''.join(p.capitalize() for p in robot.split('_'))}-v{VERSION}"
+# Shown, as Gymnasium shows its own (gymnasium.logger): Python hides a DeprecationWarning
+# raised outside __main__.
+warnings.filterwarnings("default", category=DeprecationWarning, module=r"^tasks\.gym$")
+
+
+def env_id(robot, version=VERSION):
+    """'two_wheel' -> 'EBRL/TwoWheel-v1' (version: another of VERSIONS)."""
+    return f"{NAMESPACE}/{''.join(p.capitalize() for p in robot.split('_'))}-v{version}"
 
 
 def _space(spec, bounds=None):
@@ -118,12 +141,26 @@ class NavigationEnv(gymnasium.Env):
             self._env = None
 
 
+def deprecated(robot, version, **options):
+    """The entry point of an id of a DEPRECATED version: warns, naming the current id, and
+    makes the current environment (NavigationEnv)."""
+    warnings.warn(f"{env_id(robot, version)} is deprecated: it makes {env_id(robot)}, "
+                  f"{VERSIONS[VERSION]}; use {env_id(robot)} (docs/environments/{robot}.md)",
+                  DeprecationWarning, stacklevel=1)
+    return NavigationEnv(robot, **options)
+
+
 def register_all():
-    """Registers one id per robot of the registry (idempotent)."""
+    """Registers one id per robot of the registry and its DEPRECATED versions (idempotent)."""
     for name, robot in ROBOTS.items():
         if env_id(name) not in gymnasium.registry:
             gymnasium.register(env_id(name), entry_point=NavigationEnv,
                                max_episode_steps=robot.budget, kwargs={"robot": name})
+        for version in DEPRECATED:
+            if env_id(name, version) not in gymnasium.registry:
+                gymnasium.register(env_id(name, version), entry_point=deprecated,
+                                   max_episode_steps=robot.budget,
+                                   kwargs={"robot": name, "version": version})
 
 
 register_all()

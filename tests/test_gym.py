@@ -15,10 +15,43 @@ IDS = [tasks.gym.env_id(name) for name in tasks.ROBOTS]
 
 
 def test_one_id_per_registered_robot():
-    assert IDS == ["EBRL/TwoWheel-v0", "EBRL/Floating-v0", "EBRL/DiffDrive-v0",
-                   "EBRL/Hovercraft-v0"][: len(tasks.ROBOTS)]
+    assert IDS == ["EBRL/TwoWheel-v1", "EBRL/Floating-v1", "EBRL/DiffDrive-v1",
+                   "EBRL/Hovercraft-v1"][: len(tasks.ROBOTS)]
     for name, env_id in zip(tasks.ROBOTS, IDS):
         assert gymnasium.spec(env_id).max_episode_steps == tasks.ROBOTS[name].budget
+
+
+def _made(env_id):
+    """(the environment gymnasium.make makes of env_id, the warnings it raised)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        env = gymnasium.make(env_id)
+    return env, caught
+
+
+def test_the_ids_are_versioned_and_the_old_ones_warn_and_make_the_current():
+    """v1 is protocol 8's dynamics; v0, the id before it, stays registered: it warns
+    (DeprecationWarning, naming the current id) and makes the current environment."""
+    assert tasks.gym.VERSION == 1 and set(tasks.gym.VERSIONS) == {0, 1}
+    for name in tasks.ROBOTS:
+        new, old = tasks.gym.env_id(name), tasks.gym.env_id(name, 0)
+        assert old in gymnasium.registry and gymnasium.spec(old).max_episode_steps == \
+            gymnasium.spec(new).max_episode_steps
+    env, caught = _made("EBRL/TwoWheel-v1")
+    assert not [w for w in caught if issubclass(w.category, DeprecationWarning)], caught
+    old, caught = _made("EBRL/TwoWheel-v0")
+    ours = [str(w.message) for w in caught if issubclass(w.category, DeprecationWarning)
+            and w.filename == tasks.gym.__file__]
+    assert ours and ours[0].startswith("EBRL/TwoWheel-v0 is deprecated: it makes EBRL/TwoWheel-v1")
+    assert type(old.unwrapped) is type(env.unwrapped) is tasks.gym.NavigationEnv
+    assert old.observation_space == env.observation_space and old.action_space == env.action_space
+    # the same dynamics: one seed, one action sequence, the same observations
+    for e in (env, old):
+        e.reset(seed=3)
+    for a in np.linspace(-1, 1, 5):
+        o1, o2 = env.step(np.array([a])), old.step(np.array([a]))
+        assert np.array_equal(o1[0]["range"], o2[0]["range"]) and o1[1:4] == o2[1:4]
+    env.close(), old.close()
 
 
 @pytest.mark.parametrize("env_id", IDS)
@@ -40,7 +73,7 @@ def test_check_env_passes(env_id):
 
 
 def test_goal_terminates_and_the_step_limit_truncates():
-    env = gymnasium.make("EBRL/TwoWheel-v0", start_jitter=False, sensor_noise=0.0,
+    env = gymnasium.make("EBRL/TwoWheel-v1", start_jitter=False, sensor_noise=0.0,
                          action_noise=0.0, max_episode_steps=3)
     env.reset(seed=0)
     env.unwrapped.physics.set_robot_pose(84.0, 55.0, 0.0)  # inside the goal square
@@ -54,7 +87,7 @@ def test_goal_terminates_and_the_step_limit_truncates():
     env.close()
 
 
-@pytest.mark.parametrize("env_id", ["EBRL/TwoWheel-v0", "EBRL/Floating-v0"])
+@pytest.mark.parametrize("env_id", ["EBRL/TwoWheel-v1", "EBRL/Floating-v1"])
 def test_reset_with_a_seed_reproduces_a_trajectory(env_id):
     def rollout(env, seed):
         obs, _ = env.reset(seed=seed)
@@ -76,7 +109,7 @@ def test_reset_with_a_seed_reproduces_a_trajectory(env_id):
 
 
 def test_sync_vector_env_of_four_steps():
-    envs = gymnasium.vector.SyncVectorEnv([lambda: gymnasium.make("EBRL/Floating-v0")] * 4)
+    envs = gymnasium.vector.SyncVectorEnv([lambda: gymnasium.make("EBRL/Floating-v1")] * 4)
     obs, info = envs.reset(seed=0)
     assert obs["range"].shape == (4, 8) and obs["velocity"].shape == (4, 2)
     for _ in range(5):
@@ -140,7 +173,7 @@ for env_id in IDS:  # the module's own form of the id: gymnasium imports tasks.g
         env.step(env.action_space.sample())
     env.close()
 print("before", gl())
-env = gymnasium.make("tasks.gym:EBRL/TwoWheel-v0", render_mode="rgb_array")
+env = gymnasium.make("tasks.gym:EBRL/TwoWheel-v1", render_mode="rgb_array")
 env.reset(seed=0)
 assert env.render().std() > 0
 print("after", gl())
