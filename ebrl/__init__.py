@@ -42,20 +42,23 @@ eq 9-10   avoidance by accelerating   intrinsic.eq9, intrinsic.eq10, via
           point of two families       JSON; `ebrl run --behaviour`, `ebrl evolve`)
                                       tests/test_evolve.py
 
-kernels.act and kernels.learn chain these for one step; ebrl.Agent holds the memory and
-calls them, once each per step.
+kernels.act and kernels.learn chain these for one step; ebrl.Agent holds the memory as one
+record (steps.AgentRecord) and calls them through steps.act_memory and steps.learn_step,
+once each per step (steps.end_trial at a trial's end).
 
 Readings with a credible alternative are switches: Config fields whose values are
-listed in config.READINGS, the first (docs/interpretation.md's reading) the default;
-tests in tests/test_ebrl_readings.py.
+listed in config.READINGS, the first Config's default (a protocol's readings may choose
+another: tasks.protocols, docs/interpretation.md); tests in tests/test_ebrl_readings.py.
 
-episode              trial / continuing        Agent.end_episode (keeps or cuts the link)
+episode              trial / continuing        steps.end_trial via Agent.end_episode
+                                               (keeps or cuts the link)
                      test_episode_continuing_keeps_the_link_across_a_trial_end,
                      test_episode_continuing_lets_eq7_cross_a_trial_end
-recall_at_trial_end  empty / keep              Agent.end_episode
+recall_at_trial_end  empty / keep              steps.end_trial via Agent.end_episode
                      test_recall_table_kept_or_emptied_at_a_trial_end
 eq7_scope (eq 7)     to_start / decided_only   kernels.eq7, kernels.eq7_decided via
-                                               kernels.learn; Agent.act sets the flags
+                                               kernels.learn; steps.act_memory sets
+                                               the flags
                      test_eq7_scope_to_start_or_decided_only,
                      test_eq7_decided_only_counts_an_element_once_and_forgets_its_flag
 forgetting (2.1)     least_reliable / oldest   kernels.least_reliable, kernels.oldest

@@ -19,15 +19,20 @@ memory is full, then applies eq 6 and eq 7 when r != 0 and decays every reliabil
 learn(r, last=True) ends the trial (end_episode).
 
 The readings that Config makes switches (ebrl.config.READINGS) act here as follows:
-episode and recall_at_trial_end at a trial's end (end_episode), eq7_scope and
-forgetting in kernels.learn; eq7_scope "decided_only" also flags, in act, each element
-used for a memory decision. eq9_dead_zone and random_in_avoidance belong to the
-fallback (ebrl.intrinsic.fallback_for builds it from them); the agent only calls the
-fallback's reset(), if it has one, when a trial ends.
+episode and recall_at_trial_end at a trial's end (end_episode, through
+steps.end_trial), eq7_scope and forgetting in kernels.learn (through steps.learn_step);
+eq7_scope "decided_only" also flags, in steps.act_memory, each element used for a
+memory decision. eq9_dead_zone and random_in_avoidance belong to the fallback
+(ebrl.intrinsic.fallback_for builds it from them); the agent only calls the fallback's
+reset(), if it has one, when a trial ends.
 
-The work of each step is done by two compiled kernels, ebrl.kernels.act and
-ebrl.kernels.learn, on the arrays this class holds; the agent's random stream is one
-exploration draw per act, then the fallback's draws when the fallback acts.
+The work of each step is done by the compiled per-step kernels of ebrl.steps
+(act_memory, learn_step, end_trial; act_step and trial_end below add a compiled
+fallback) on the agent's record (steps.AgentRecord), which holds the arrays of this
+class's memory; they call ebrl.kernels.act and ebrl.kernels.learn, which chain the
+equations. The agent's random stream is one exploration draw per act, then the
+fallback's draws when the fallback acts (or the random action's, for exploration
+"random").
 """
 from __future__ import annotations
 

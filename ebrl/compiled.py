@@ -55,9 +55,9 @@ fallback follows numba's rename in 0.62, read in numba's source, not run here):
   the same way; here the entry is discarded, the kernel compiled again (the same
   compiled code: the cache holds what a compile makes) and saved anew, with one line on
   stderr naming the file (see MendingCacheFile).
-The public alternative measured (docs/speed.md): a NUMBA_CACHE_DIR named by the content
-of all of ebrl/, tasks/ and experiments/ recompiles every kernel after any edit (21-22 s
-here, against 2-10 s for what depends on the edited file, and nothing for a file no
+The public alternative (docs/speed.md, its timings): a NUMBA_CACHE_DIR named by the
+content of all of ebrl/, tasks/ and experiments/ recompiles every kernel after any edit
+(where this recompiles what depends on the edited file only, and nothing for a file no
 kernel reaches), must be set before the first decoration as well, and displaces a user's
 own NUMBA_CACHE_DIR.
 """
@@ -81,8 +81,8 @@ _PACKAGE_FOLDERS = {"site-packages", "dist-packages"}
 @functools.lru_cache(maxsize=None)
 def _realpath(path):
     """os.path.realpath, once per path and process: each kernel's stamp walks the same
-    few hundred module files, and the system calls of realpath were half the time of
-    importing the kernels from the cache (measured: 24,835 calls for 119 kernels)."""
+    few hundred module files, and realpath's system calls on each of them would be a large
+    part of importing the kernels from the cache (docs/speed.md)."""
     return os.path.realpath(path)
 
 

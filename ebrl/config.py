@@ -10,10 +10,10 @@ CONDITIONS = ("random", "avoidance")
 #: Table 1's memory size by column: (T) two wheels robot, (F) floating robot.
 TABLE1_MEMORY = {"T": 1024, "F": 4096}
 
-#: The agent's switches, {name: values}, the first being this replication's reading (the
-#: default): a view of the registry (ebrl.readings.AGENT, where each reading's scope,
-#: default, the paper's words and description live); the kernels receive a value as its
-#: index in this tuple.
+#: The agent's switches, {name: values}, the first being the registry's default (Config's;
+#: a protocol may give another, tasks.protocols): a view of the registry
+#: (ebrl.readings.AGENT, where each reading's scope, default, the paper's words and
+#: description live); the kernels receive a value as its index in this tuple.
 READINGS = {r.name: r.values for r in readings.AGENT if r.switch}
 
 #: The readings that belong to the fallback (Section 3.4's intrinsic behaviour), not to

@@ -1,12 +1,12 @@
 """The agent's readings of the paper, one record each: the home of every reading.
 
 A reading is a detail the paper leaves open, or states in words this replication had to
-read, that a run may change: a switch (a tuple of choices, the first this replication's
-reading and the default; the kernels receive a value as its index) or a number (a
-Range). Each record holds the reading's name, its scope, its allowed values and default,
-the paper's words where the paper states the value (the quote, with its section) or
-OPEN where it does not, and a one-line description. docs/interpretation.md gives every
-reading's reason.
+read, that a run may change: a switch (a tuple of choices, the first the default; the
+kernels receive a value as its index) or a number (a Range); a protocol
+(tasks.protocols) may give a reading a value other than its default. Each record holds
+the reading's name, its scope, its allowed values and default, the paper's words where
+the paper states the value (the quote, with its section) or OPEN where it does not, and
+a one-line description. docs/interpretation.md gives every reading's reason.
 
 The task's readings use the same record (tasks/readings.py, which also lists both for
 the commands: tasks.readings.EVERY). ebrl.Config takes its reading fields' defaults

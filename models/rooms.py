@@ -13,8 +13,8 @@ writes the room: the floor under the inner cells, the border as four outer walls
 and east the full height, south and north between them), the inner walls merged into
 few boxes (`merged_walls`), the goal site over the goal cell, the start site at the
 start cell's centre heading to its first free neighbour (east, north, west, south), the
-cameras framing the whole room. The paper's room is `sutton`'s, bit for bit the room
-that room.xml held before maps (tests/test_rooms.py, tests/data/make_golden.py).
+cameras framing the whole room. The paper's room is `sutton`'s, bit for bit the room the
+golden data were made in (tests/test_rooms.py, tests/data/make_golden.py; docs/rooms.md).
 Coordinates: the inner cells' lower-left corner is the world origin, x east, y north.
 """
 from __future__ import annotations

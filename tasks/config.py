@@ -1,5 +1,5 @@
-"""Every task parameter, with the paper's values (and this replication's readings) as
-defaults: the task's counterpart of ebrl.Config. A run records it whole in config.json,
+"""Every task parameter, with the paper's values (and, for a reading, its registry default:
+tasks/readings.py) as defaults: the task's counterpart of ebrl.Config. A run records it whole in config.json,
 and `ebrl run --set NAME=VALUE` changes any field, as it does the agent's.
 """
 import dataclasses

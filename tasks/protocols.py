@@ -22,17 +22,8 @@ This module imports nothing heavy: the command line checks names before any work
 import dataclasses
 from types import MappingProxyType
 
-#: Bump when a change alters what a run computes, so stale results are not reused.
-#: 8: issue 56's body (a two-wheel move ends where the body first touches the room and
-#: its rest is turned, Section 3.3, on every two-wheel realisation; blocked_move "stop"
-#: in every protocol; the literal body kept by the fit, the shared threshold 0.2, fitted
-#: on seeds 8000-8099); 7: issue 48's rules kept whole (every random action Section 3.4's Gaussian; one
-#: fallback, the 20% replacing; the planar two-wheel body: radius 1.5, a blocked move
-#: refused, the commanded turn; fitted on seeds 7000-7099); 6: issue 37's rules (the 20%
-#: random action Section 3.4's Gaussian, one learner for both robots: policy threshold
-#: 0.3, initial reliability 1); 5: stage 1's readings, eq 2-4 by reciprocals; 4: the
-#: adopted readings per drive, diff_drive's Euler; 3: float64 similarity (CHANGELOG.md:
-#: each version, its commit).
+#: Bump when a change alters what a run computes, so stale results are not reused
+#: (CHANGELOG.md: each version, what changed and the commit that set it).
 PROTOCOL_VERSION = 8
 
 
@@ -71,9 +62,8 @@ class Protocol:
 #: protocol 8's body the two-wheel robot passed 6 of its 8 stated tests at 0.2 against 4 at
 #: 0.3 and 0.4 (at least 2 more), so the floating robot's counts from protocol 7's fit
 #: (seeds 7000-7049: 5 of 6 at 0.2, 6 at 0.3) were added: 11 against 10
-#: (docs/protocol8_fit.md). Protocol 6 chose 0.3 (seeds 300-349 / 300-329) and protocol 7
-#: kept it; every other learner reading is its registry default (the cutoff of eq 6,
-#: utility_cutoff, included: 1e-4).
+#: (docs/protocol8_fit.md). Every other learner reading is its registry default (the
+#: cutoff of eq 6, utility_cutoff, included: 1e-4).
 LEARNER = (("policy_threshold", 0.2),)
 #: The fallback (protocol 7's, kept), one for both drives (Section 3.4 describes its random action
 #: once, "in both types of experiments"): every random action Section 3.4's Gaussian

@@ -1,18 +1,16 @@
 """Every compiled kernel into numba's on-disk cache, once, before many processes want it.
 
 `make test` runs this first (`python -m experiments.checks.warm`). On a fresh clone no
-kernel is cached: a cold `ebrl run --robot paper --steps 50` took 34 s of CPU where a warm
-one takes 4.4 s, and the test processes that start together (two pytest workers, the
-`ebrl` commands and pool workers they start) would each compile the same kernels before
-the first of them has written its cache entry. Here one short run of each robot, condition
+kernel is cached: a cold run spends most of its time compiling (docs/speed.md, "Compiling,
+and what was not adopted"), and the test processes that start together (two pytest
+workers, the `ebrl` commands and pool workers they start) would each compile the same
+kernels before the first of them has written its cache entry. Here one short run of each robot, condition
 and learner, in both loops (the compiled stretches and dm_control's step by step), compiles
 each kernel once, on two processes; every later process loads them (ebrl/compiled.py).
 The runs go to the processes one realisation at a time (tasks.realisations): the robots of
 a realisation share its kernels, so a process that has compiled them runs the others in
 no time, where two processes given one realisation's robots at once would both compile
-them (the first version paired each robot's two conditions across the processes: 54 s on
-a fresh clone, every kernel compiled twice; by realisation, 35 s). A warm cache makes this
-a few seconds. Nothing is written but numba's cache.
+them. A warm cache makes this a few seconds. Nothing is written but numba's cache.
 """
 import concurrent.futures
 import multiprocessing

@@ -1,4 +1,4 @@
-"""The optimal path as a yardstick for learned trials (issue: "no learned path was optimal").
+"""The optimal path as a yardstick for learned trials: how far a learned path is from the best.
 
 Geometry: the shortest collision-free path of the robot's centre from the nominal
 start to the goal square, in the room inflated by the robot's radius (rounded

@@ -148,8 +148,8 @@ def save(fig, path, dpi=90):
 
 def log_y(ax):
     """A log scale on ax's y axis, its ticks labelled as plain numbers (300, 1000, 6000).
-    matplotlib's own labels are mathtext (10^3), whose parser alone costs 0.2 s of CPU per
-    process: a third of a report's figures."""
+    matplotlib's own labels are mathtext (10^3), whose parser is a large part of a report's
+    figures' cost (docs/speed.md, "The test suite's time")."""
     from matplotlib import ticker
     ax.set_yscale("log")
     ax.yaxis.set_major_formatter(ticker.LogFormatter())

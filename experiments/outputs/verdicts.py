@@ -86,8 +86,8 @@ def welch(m1, s1, n1, m2, s2, n2, alternative="two-sided"):
     scipy.stats.ttest_ind_from_stats(..., equal_var=False) step for step (its variances
     per size, its Welch-Satterthwaite df, the t distribution's tail by special.stdtr, on
     0-d arrays as it computes them: the same bits, tests/test_verdicts.py), written here
-    because importing scipy.stats was the largest part of every report's start (0.7 s of
-    CPU; scipy.special alone 0.2 s), paid by each `ebrl` command that builds a report."""
+    because importing scipy.stats is the largest part of a report's start, paid by each
+    `ebrl` command that builds a report (docs/speed.md, "The test suite's time")."""
     m1, s1, m2, s2 = (np.asarray(v, dtype=np.float64) for v in (m1, s1, m2, s2))
     t, _, p = _welch_arrays(m1, s1, n1, m2, s2, n2, alternative)
     return {"t": float(t), "df": float(welch_df(float(s1), n1, float(s2), n2)), "p": float(p)}

@@ -47,9 +47,9 @@ def run(specs, workers, done):
 
 
 #: What the pool's server process imports once, before it forks each worker: the worker,
-#: and the simulator, the kernels and the agent a run loads (the worker module itself is
-#: light since the command line's modules were kept light; without these each worker
-#: imported MuJoCo, dm_control and numba again, and `make test` took about twice as long).
+#: and the simulator, the kernels and the agent a run loads. The worker module is light
+#: (the command line imports it) and does not pull them in, so without them each worker
+#: would import MuJoCo, dm_control and numba again (docs/speed.md, "The test suite's time").
 PRELOAD = ["experiments.running.worker", "experiments.running.fused", "tasks.environment",
            "tasks.kernels.steps", "ebrl.agent"]
 
@@ -57,11 +57,9 @@ PRELOAD = ["experiments.running.worker", "experiments.running.fused", "tasks.env
 def context():
     """The pool's start method: forkserver (where the platform has it; else spawn). Each
     worker is forked from one server process per command that has imported PRELOAD, where
-    a spawned worker starts a fresh interpreter and imports them itself (0.56 s of CPU a
-    worker; a worker then loads its kernels from numba's cache, about 0.5 s, either way).
-    Measured (the machine's CPU, /proc/stat): a 12-run `ebrl run` with two workers, 4.3 s
-    with spawn, 3.6 s with the forkserver; a study, which makes a pool per batch, saves it
-    at every batch. The server is started from _submit, SIGINT ignored, so its workers
+    a spawned worker would start a fresh interpreter and import them itself; a study, which
+    makes a pool per batch, saves that at every batch (the cost: docs/speed.md, "The test
+    suite's time"). The server is started from _submit, SIGINT ignored, so its workers
     ignore SIGINT as spawned ones did. It lives as long as the process that started it,
     and its workers get the environment it had then (with worker.SINGLE_THREAD): a
     variable set later in the same process reaches no worker. The workers are the server's

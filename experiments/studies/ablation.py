@@ -58,7 +58,7 @@ READINGS = (
     _ablated("forgetting"),
     _ablated("radius", (None, 1.0, 2.5)),
     _ablated("policy_threshold", (0.0, 0.05, 0.2)),
-    # issue 37's untried Section 2 readings (docs/interpretation.md, "The agent")
+    # the untried Section 2 readings (docs/interpretation.md, "The agent")
     _ablated("eq7_signal"),
     _ablated("eq7_walk"),
     _ablated("utility_cutoff", (1e-4, 0.0)),

@@ -8,10 +8,10 @@ of this stage runs 64 or more seeds of each condition, to the first goal or the 
 budget, through the one study runner (experiments.studies.study) that `ebrl fit` and
 `ebrl evolve` share.
 
-The space (SPACES) is per drive: the readings that can change a first trial, the ones
-item 2 of issue 29 added (random_demand, leftover_turn; blocked_move left it with
-protocol 8, being stated), the body's
-(radius; the floating bump, restitution, wall friction), the floating drive's action
+The space (SPACES) is per drive: the readings that can change a first trial: the random
+walk's demand and the leftover turn (random_demand, leftover_turn; blocked_move is
+stated, so not searched), the body's (radius; the floating bump, restitution, wall
+friction), the floating drive's action
 noise (the paper gives the two-wheel robot's 5% only) and the fallback's switches.
 Table 1, the room, the sensors and the actions' maxima stay fixed. The objective is
 `distance`; `validate` reruns a trial's settings and the defaults on held-out seeds.

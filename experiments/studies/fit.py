@@ -18,7 +18,7 @@ figure, as the paper reports it) for first-trial steps and steps per trial, and
 SHRINK_SCALE for the shrinks (the paper gives no spread). A figure the trial cannot
 compute (no run reached the goal) costs MISSING_TERM.
 
-That is the "table" stage (STAGES). The "first-trial" stage (stage 1 of issue 29:
+That is the "table" stage (STAGES). The "first-trial" stage (stage 1 of the fit:
 `ebrl fit --stage first-trial --robot DRIVE`) fits one drive's physics and fallback
 readings to the paper's first-trial distributions on first-trial runs, on the same
 study runner: experiments/studies/first_trials.py.

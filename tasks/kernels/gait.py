@@ -3,9 +3,9 @@
 feedback (tasks.realisations.gait's docstring).
 
 `walk` runs n control ticks of the CPG and the PD loops; `turn` and `move` close the
-heading and distance feedback around it; `halt` is the one substep dm_control's
-environment ran after the gait's step (kept: the same bits as the hooks before the gait
-was compiled).
+heading and distance feedback around it; `halt`, the family's last phase
+(tasks.kernels.two_wheel.act), is one substep at the last controls, kept so that the
+gait's runs keep their bits (tests/test_step_digests.py).
 """
 import math
 

@@ -62,10 +62,10 @@ class ThrustersPhysics(navigation.Physics):
         self.parts.update(bump=BUMPS.code(bump), restitution=float(restitution))
 
     def step(self, nstep=1):
-        """Substeps with the bump reading (kernels.bump_phase): with "stop" or "bounce", a
-        substep that brings the bumper into a wall while moving towards it is undone and
-        the velocity becomes 0 ("stop") or its mirror image off the wall ("bounce"); with
-        the others, the substeps as navigation.Physics.step runs them."""
+        """Substeps with the bump reading (tasks.kernels.thrusters.bump_phase): with "stop"
+        or "bounce", a substep that brings the bumper into a wall while moving towards it
+        is undone and the velocity becomes 0 ("stop") or its mirror image off the wall
+        ("bounce"); with the others, the substeps as navigation.Physics.step runs them."""
         if nstep <= 0 or self.record is None:
             return super().step(nstep)
         status = kernels.bump_phase(self.record, nstep)
