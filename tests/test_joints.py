@@ -315,12 +315,55 @@ def test_the_joint_controllers_solve_by_hand(tmp_path):
             env.close()
 
 
+def test_joint_motors_gains_per_joint(tmp_path):
+    """kp and kv as [forward's, turn's]: torque motors on tendons roll + steer and roll -
+    steer give tau_j = kp_j (target_j - q_j) - kv_j dq_j (the controls as in the test
+    above); one number is both joints' gain, bit for bit the same run as [k, k]."""
+    from tasks.kernels import plan as joints
+    q, dq, target = np.array([0.3, -0.2]), np.array([0.5, 1.0]), np.array([0.5, 0.1])
+    text = TRICYCLE_MOUNT.format(name="tricycle_mixed", gains="kp = [2.0, 3.0]\nkv = [0.1, 0.2]\n")
+    env = tasks.load(str(_tricycle(tmp_path, "mixed", mount=text)), seed=0)
+    try:
+        env.reset()
+        parts = env.physics.parts
+        assert list(parts["kp"]) == [2.0, 3.0] and list(parts["kv"]) == [0.1, 0.2]
+        env.physics.data.qpos[parts["joint_q"]] = q
+        env.physics.data.qvel[parts["joint_dof"]] = dq
+        parts["target"][:] = target
+        joints.controls(env.physics.record)
+        tau = np.array([2.0, 3.0]) * (target - q) - np.array([0.1, 0.2]) * dq
+        expected = np.clip([(tau[0] + tau[1]) / 2, (tau[0] - tau[1]) / 2], -1, 1)
+        assert np.allclose(parts["controls"], expected, atol=1e-9), (parts["controls"], expected)
+    finally:
+        env.close()
+    runs = []
+    for gains in ("kp = 2.0\nkv = 0.1\n", "kp = [2.0, 2.0]\nkv = [0.1, 0.1]\n"):
+        folder = tmp_path / str(len(runs))
+        folder.mkdir()
+        text = TRICYCLE_MOUNT.format(name="tricycle_torque", gains=gains)
+        env = tasks.load(str(_tricycle(folder, "torque", mount=text)), seed=1)
+        try:
+            env.reset()
+            rng = np.random.default_rng(2)
+            runs.append([env.step(rng.uniform(-1, 1, 1)) and env.physics.data.qpos.copy()
+                         for _ in range(10)])
+        finally:
+            env.close()
+    assert all(np.array_equal(a, b) for a, b in zip(*runs))
+
+
 BAD_JOINT_MOTORS = [
     ("torque", GAINS["torque"].replace("kv = 0.1\n", ""), "action.kv: missing: the torque motors' gain"),
     ("position", "kp = 3.0\n", "action.kp: not a gain of position servos"),
     ("velocity", "", "action.kp: missing: the velocity servos' gain"),
     ("torque", GAINS["torque"] + "kd = 1.0\n", "action.kd: unknown key"),
     ("position", "kv = 0.1\n", "action.kv: not a gain of position servos"),
+    ("torque", "kp = [2.0]\nkv = 0.1\n", "action.kp: one number for both joints, or a list "
+                                         "of 2, one per joint (forward, turn), got 1"),
+    ("torque", "kp = [2.0, -1.0]\nkv = 0.1\n", "action.kp[1]: must be positive, got -1.0"),
+    ("torque", 'kp = 2.0\nkv = [0.1, "a"]\n', "action.kv[1]: must be a number, got 'a'"),
+    ("torque", "kp = 2.0\nkv = [-0.1, 0.1]\n", "action.kv[0]: must not be negative, got -0.1"),
+    ("position", "kp = [2.0, 3.0]\n", "action.kp: not a gain of position servos"),
 ]
 
 

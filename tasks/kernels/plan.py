@@ -10,13 +10,13 @@ the halt puts the targets where the joints are (`hold_here`), so a stalled joint
 up the rest. At every substep the controller (`controls`) turns the targets into the
 actuators' controls, by the actuators' kind (tasks.actuators.ACTUATOR_KINDS):
 
-- TORQUE (motors): the PD torques tau = kp (target - q) - kv dq, and the motors'
+- TORQUE (motors): the PD torques tau_j = kp_j (target_j - q_j) - kv_j dq_j, and the motors'
   controls of least norm that give them (`motor_controls`, over the motors' forces
   measured at load: tasks.actuators.motor_forces);
 - POSITION (position servos): each servo's control is its length at the targets,
   length0 + sum_j gain[k, j] (target_j - rest_j) (gain: its length per unit of joint
   j, measured at load; the servo's own gains hold it there);
-- VELOCITY (velocity servos): the joints' speeds v = kp (target - q), each servo's
+- VELOCITY (velocity servos): the joints' speeds v_j = kp_j (target_j - q_j), each servo's
   control its speed at those, sum_j gain[k, j] v_j.
 
 Each control is clipped to its actuator's range.
@@ -38,7 +38,8 @@ PLAN_FIELDS = (
     # the two joints' qpos and dof addresses and rest positions; the actuators, the
     # controller (TORQUE, POSITION, VELOCITY), the motors' forces on the joints and their
     # Gram matrix (TORQUE), the actuators' length per unit of each joint and their
-    # lengths at rest (POSITION, VELOCITY), the controls' ranges; the gains
+    # lengths at rest (POSITION, VELOCITY), the controls' ranges; the gains, one per
+    # joint
     "joint_q", "joint_dof", "rest", "motors", "mode", "forces", "gram", "gain", "length0",
     "ctrl_lo", "ctrl_hi", "kp", "kv",
     # the targets (rad or m), their step per ramp substep, the ramp's substeps left;
@@ -90,14 +91,14 @@ def solve(s):
     qpos, qvel = s.qpos, s.qvel
     if s.mode == TORQUE:
         for j in range(2):
-            tau[j] = s.kp * (target[j] - qpos[q[j]]) - s.kv * qvel[dq[j]]
+            tau[j] = s.kp[j] * (target[j] - qpos[q[j]]) - s.kv[j] * qvel[dq[j]]
         motor_controls(s.forces, s.gram, tau, s.ctrl_lo, s.ctrl_hi, c)
         return
     for j in range(2):
         if s.mode == POSITION:
             tau[j] = target[j] - s.rest[j]
         else:
-            tau[j] = s.kp * (target[j] - qpos[q[j]])
+            tau[j] = s.kp[j] * (target[j] - qpos[q[j]])
     for k in range(c.shape[0]):
         u = s.length0[k] if s.mode == POSITION else 0.0
         u += s.gain[k, 0] * tau[0] + s.gain[k, 1] * tau[1]

@@ -33,7 +33,9 @@ tasks.navigation reads, so a mounted model is as self-describing as a contract f
     [action]
     kind = "servos"                     # a kind of KINDS: servos, thrusters,
                                         # actuators, wheels, wheel_motors,
-                                        # joint_motors, gait ([[action.legs]])
+                                        # joint_motors, gait ([[action.legs]]); the
+                                        # kind's fields (joint_motors' kp, kv: one
+                                        # number, or [forward's, turn's])
     [readings]                          # TaskConfig or agent fields (Robot.readings)
 
 Every error is one line, ``<mount file>: <field>: <what is wrong>``: a MountError when the

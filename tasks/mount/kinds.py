@@ -11,6 +11,7 @@ nothing heavy (the registry reads mounts before any MuJoCo import)."""
 from __future__ import annotations
 
 import dataclasses
+from typing import ClassVar
 
 from tasks.actuators import OTHER_ADVICE, joints_moved, spec_kind, spec_why_other
 from tasks.mount.fields import fail
@@ -200,6 +201,9 @@ class Wheels(Action):
     def claimed(self):
         return set(self.keys)
 
+    def gains(self):
+        return {"kp": self.kp, "kv": self.kv}
+
     def edit(self, mount, spec, base, names):
         import mujoco
         for role, joint in (("left", self.left), ("right", self.right)):
@@ -247,6 +251,9 @@ class WheelMotors(Action):
 
     def claimed(self):
         return set(self.keys)
+
+    def gains(self):
+        return {"kp": self.kp, "kv": self.kv}
 
     def roles(self):
         """(contract name, the file's name) pairs: the hinges left and right, the motors
@@ -300,8 +307,12 @@ class JointMotors(Action):
     keys = frozenset({"forward", "turn", "kp", "kv"})
     forward: str = ""
     turn: str = ""
-    kp: float | None = None         # torque motors: N m/rad (PD); velocity servos: 1/s (P)
-    kv: float | None = None         # torque motors: N m s/rad
+    # the gains: one for both joints, or (forward's, turn's) where their motors differ
+    # (kp = [80, 120]); torque motors: kp N m/rad, kv N m s/rad (PD); velocity servos:
+    # kp 1/s (P)
+    kp: float | tuple[float, float] | None = None
+    kv: float | tuple[float, float] | None = None
+    gain_joints: ClassVar[tuple[str, ...]] = ("forward", "turn")
 
     def on_floor(self, spec):
         """A forward joint that is a hinge rolls a wheel (or a ball) on the floor."""
@@ -318,10 +329,8 @@ class JointMotors(Action):
             joints[role] = fields.text(table, role, f"action.{role}")
         if joints["forward"] == joints["turn"]:
             fields.fail("action.turn", f"joint {joints['turn']!r} is the forward joint too")
-        kp = fields.number(table, "kp", "action.kp")
-        kv = fields.number(table, "kv", "action.kv", positive=False)
-        if kv is not None and kv < 0:
-            fields.fail("action.kv", f"must not be negative, got {kv!r}")
+        kp = _per_joint(fields, table, "kp", cls.gain_joints, positive=True)
+        kv = _per_joint(fields, table, "kv", cls.gain_joints, positive=False)
         return cls(**joints, kp=kp, kv=kv)
 
     def claimed(self):
@@ -369,8 +378,32 @@ class JointMotors(Action):
                 fail(mount.path, f"action.{k}", f"not a gain of {kind} (they hold their "
                                                 "targets with their own)")
 
+    def gains(self):
+        return {k: getattr(self, k) for k in ("kp", "kv") if getattr(self, k) is not None}
+
     def physics_attributes(self):
         return {"joints": (self.forward, self.turn), "kp": self.kp or 0.0, "kv": self.kv or 0.0}
+
+
+def _per_joint(fields, table, key, roles, positive):
+    """[action] `key`: a number for every joint, or a list of one per joint role (roles,
+    in their order); positive, or (not positive) at least 0. None when absent."""
+    where = f"action.{key}"
+    v = table.get(key)
+    if not isinstance(v, list):
+        n = fields.number(table, key, where, positive=positive)
+        if n is not None and n < 0:
+            fields.fail(where, f"must not be negative, got {v!r}")
+        return n
+    if len(v) != len(roles):
+        fields.fail(where, f"one number for both joints, or a list of {len(roles)}, one per "
+                           f"joint ({', '.join(roles)}), got {len(v)}")
+    values = tuple(fields.number({key: x}, key, f"{where}[{i}]", positive=positive)
+                   for i, x in enumerate(v))
+    for i, n in enumerate(values):
+        if n < 0:
+            fields.fail(f"{where}[{i}]", f"must not be negative, got {v[i]!r}")
+    return values
 
 
 #: A gait leg's keys ([[action.legs]]): its swing joint, its lift joint or joints, its

@@ -44,6 +44,10 @@ class Action:
     keys: ClassVar[frozenset[str]] = frozenset()
     #: What of the file the kind's own elements replace (added to the mount's drop).
     drops: ClassVar[frozenset[str]] = frozenset()
+    #: The joints, by role, whose gains may differ: a gain given as a list gives one per
+    #: role, in this order (joint_motors: kp = [forward's, turn's]); () where one gain
+    #: serves every joint.
+    gain_joints: ClassVar[tuple[str, ...]] = ()
 
     @classmethod
     def parse(cls, fields, table: dict, drive: str) -> Action:
@@ -69,6 +73,13 @@ class Action:
         """The realisation the mount runs on (a name of tasks.realisations.REALISATIONS):
         the kind's own name, but for a kind that serves several drives."""
         return self.name
+
+    def gains(self) -> dict:
+        """The drive's gains the mount gives, by [action] field (a number, or one per
+        gain_joints role): its open drive values beside time_scale, which `ebrl check
+        --tune` searches (experiments.checks.tune); none for a kind whose actuators hold
+        their targets with gains of their own."""
+        return {}
 
     def physics_attributes(self) -> dict:
         """The class attributes the realisation's Physics takes from the mount (its

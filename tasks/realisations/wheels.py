@@ -36,7 +36,8 @@ class Planned(Ramped):
     """The target plan on two joints (tasks.kernels.plan): its parts of the record, and
     its targets held where the joints are when the robot is placed."""
 
-    #: The plan's gains (torque motors: kp N m/rad, kv N m s/rad; velocity servos: kp 1/s).
+    #: The plan's gains (torque motors: kp N m/rad, kv N m s/rad; velocity servos: kp 1/s):
+    #: one for both joints, or a pair (the first joint's, the second's).
     kp = 0.0
     kv = 0.0
 
@@ -63,7 +64,7 @@ class Planned(Ramped):
         return dict(
             joint_q=q, joint_dof=dof, rest=self.rest_qpos[q].copy(), motors=motors, mode=mode,
             forces=forces, gram=mtm, gain=gain[motors].copy(), length0=lengths[motors].copy(),
-            ctrl_lo=ctrl_lo, ctrl_hi=ctrl_hi, kp=float(self.kp), kv=float(self.kv),
+            ctrl_lo=ctrl_lo, ctrl_hi=ctrl_hi, kp=_pair(self.kp), kv=_pair(self.kv),
             target=self._target, delta=np.zeros(2), ramp_left=self._ramp_left, tau=np.zeros(2),
             controls=np.zeros(len(motors)), target0=np.zeros(2),
             ramp_left0=np.zeros(1, dtype=np.int64))
@@ -71,6 +72,11 @@ class Planned(Ramped):
     def set_robot_pose(self, x, y, heading=0.0):
         super().set_robot_pose(x, y, heading)
         hold_here(self._target, self._ramp_left, self._qpos, self._joint_q)
+
+
+def _pair(gain):
+    """A gain for each of the plan's two joints: a number for both, or a pair as given."""
+    return np.broadcast_to(np.asarray(gain, dtype=float), (2,)).copy()
 
 
 class WheelsPhysics(Ramped):
