@@ -170,13 +170,17 @@ def _mounted(path):
     key = str(pathlib.Path(path).resolve())
     if key not in _MOUNTED:
         from tasks import mount
-        m = mount.parse(path)
-        _MOUNTED[key] = Robot(m.name, m.model, m.drive, m.action.realisation(m.drive),
-                              unit=m.unit, time_scale=m.time_scale,
-                              own_readings=m.readings, accuracy_limits=m.check,
-                              description=m.description or f"mounted from {m.file}",
-                              mount=m, **_mount_options(m))
+        _MOUNTED[key] = mount_entry(mount.parse(path))
     return _MOUNTED[key]
+
+
+def mount_entry(m):
+    """The registry entry of a parsed mount (tasks.mount.Mount)."""
+    return Robot(m.name, m.model, m.drive, m.action.realisation(m.drive),
+                 unit=m.unit, time_scale=m.time_scale,
+                 own_readings=m.readings, accuracy_limits=m.check,
+                 description=m.description or f"mounted from {m.file}",
+                 mount=m, **_mount_options(m))
 
 
 def _mount_options(mount):

@@ -12,6 +12,7 @@ file as much as for the registered ones.
   its origin (a nearer reading is the robot itself, or the floor: a robot that reads
   contact in open space is blind).
 """
+import dataclasses
 import math
 import time
 
@@ -27,6 +28,10 @@ from models import rooms
 SINK_SHARE = 0.5
 #: Section 3.3's 5% noise, as a share of the largest command, is the accuracy asked.
 ACCURACY = 0.05
+#: `ebrl check`'s default counts: random actions of the fuzz, free-space actions of the
+#: accuracy check.
+ACTIONS = 100_000
+ACCURACY_ACTIONS = 1000
 
 
 def clearance(layout, x, y):
@@ -224,34 +229,96 @@ def fuzz(robot, actions=100_000, seed=0, drive=None, room=None):
             "seconds": time.perf_counter() - started}
 
 
-def main(robots, actions, accuracy_actions, drive=None, room=None):
-    """Prints both checks for each robot; returns 0 if every robot passes, else 1."""
+#: A failure whose size the check does not measure (a NaN, a MuJoCo warning, beams that
+#: see nothing of the room, an unstable or tipped robot) as a share of its limit: worse
+#: than any measured failure, so a search (experiments.checks.tune) leaves it first.
+UNMEASURED = 1000.0
+
+
+@dataclasses.dataclass(frozen=True)
+class Checked:
+    """One robot's check (`check`): its lines, each ending ok or FAIL; how many failed;
+    and each measure as a share of its limit (the accuracy's largest errors, the fuzz's
+    deepest sink, largest tilt and falls; UNMEASURED for a failure with no size), where
+    under 1 passes (an accuracy's exactly 1 too): what `ebrl check --tune` scores."""
+    lines: tuple[str, ...]
+    failed: int
+    shares: dict
+
+    @property
+    def passed(self) -> bool:
+        return self.failed == 0
+
+    def worst(self) -> tuple[str, float]:
+        """(the measure, its share) nearest its limit, or furthest past it."""
+        name = max(self.shares, key=self.shares.get)
+        return name, self.shares[name]
+
+
+def check(robot, actions, accuracy_actions, drive=None, room=None, name=None):
+    """Both checks of one robot (a name, a file or a tasks.Robot), as `ebrl check` prints
+    them (name: the robot as the lines name it; default: robot): a Checked. A robot that
+    falls over or turns unstable in free space, or in the fuzz where its [check] counts
+    no falls, fails that check with the simulation's one-line reason."""
+    from dm_control.rl import control
     from tasks import navigation
-    failed = 0
-    for robot in robots:
+    name = robot if name is None else name
+    lines, failed, shares = [], 0, {}
+    try:
         errors, limits, seen, signed = free_space(robot, accuracy_actions, drive=drive,
                                                   room=room)
-        lines, beams_failed = beam_lines(robot, accuracy_actions, seen, *beam_heights(robot, drive, room))
+    except control.PhysicsError as e:
+        failed += 1
+        shares["free space"] = UNMEASURED
+        lines.append(f"{name}: free-space actions: {e} FAIL")
+        errors = None
+    if errors is not None:
+        beams, beams_failed = beam_lines(name, accuracy_actions, seen,
+                                         *beam_heights(robot, drive, room))
+        lines += beams
         failed += beams_failed
-        for line in lines:
-            print(line)
+        if beams_failed:
+            shares["beams"] = UNMEASURED
         for key, e in errors.items():
             ok = e.max() <= limits[key]
             failed += not ok
-            print(f"{robot}: {key} error over {len(e)} free-space actions: median {np.median(e):.4f}, "
-                  f"95% {np.percentile(e, 95):.4f}, max {e.max():.4f} (limit {limits[key]:.3f}; "
-                  f"{way(signed[key])}) {'ok' if ok else 'FAIL'}")
+            shares[key] = float(e.max() / limits[key])
+            lines.append(f"{name}: {key} error over {len(e)} free-space actions: median "
+                         f"{np.median(e):.4f}, 95% {np.percentile(e, 95):.4f}, max {e.max():.4f} "
+                         f"(limit {limits[key]:.3f}; {way(signed[key])}) {'ok' if ok else 'FAIL'}")
+    counted = "falls" in dict(tasks.resolve(robot, drive).accuracy_limits)
+    try:
         r = fuzz(robot, actions, drive=drive, room=room)
-        max_tilt = navigation.MAX_TILT_DEGREES
-        if "falls" in dict(tasks.resolve(robot, drive).accuracy_limits):
-            max_tilt = 90.0  # a gait's falls are counted instead (tasks.realisations.gait's max_tilt)
-        ok = (r["worst_clearance"] > -r["sink_limit"] and r["nan_steps"] == 0
-              and r["warnings"] == 0 and r["max_tilt_degrees"] < max_tilt
-              and r["falls"] <= r["fall_limit"])
-        failed += not ok
-        print(f"{robot}: {actions:,} random actions in {r['seconds']:.0f} s: deepest into a wall "
-              f"{max(0.0, -r['worst_clearance']):.3f} units (limit {r['sink_limit']:.2f}), largest tilt "
-              f"{r['max_tilt_degrees']:.2f} degrees, NaN steps {r['nan_steps']}, MuJoCo warnings "
-              f"{r['warnings']}, falls {r['falls']} (limit {r['fall_limit']:.0f}) "
-              f"{'ok' if ok else 'FAIL'}")
+    except control.PhysicsError as e:
+        failed += 1
+        shares["fuzz"] = UNMEASURED
+        lines.append(f"{name}: {actions:,} random actions: {e} FAIL")
+        return Checked(tuple(lines), failed, shares)
+    # a gait's falls are counted instead (tasks.realisations.gait's max_tilt)
+    max_tilt = 90.0 if counted else navigation.MAX_TILT_DEGREES
+    deepest = max(0.0, -r["worst_clearance"])
+    ok = (r["worst_clearance"] > -r["sink_limit"] and r["nan_steps"] == 0
+          and r["warnings"] == 0 and r["max_tilt_degrees"] < max_tilt
+          and r["falls"] <= r["fall_limit"])
+    failed += not ok
+    shares.update(deepest=deepest / r["sink_limit"], tilt=r["max_tilt_degrees"] / max_tilt,
+                  falls=r["falls"] / (r["fall_limit"] + 1))
+    if r["nan_steps"] or r["warnings"]:
+        shares["NaN or warnings"] = UNMEASURED
+    lines.append(f"{name}: {actions:,} random actions in {r['seconds']:.0f} s: deepest into a "
+                 f"wall {deepest:.3f} units (limit {r['sink_limit']:.2f}), largest tilt "
+                 f"{r['max_tilt_degrees']:.2f} degrees, NaN steps {r['nan_steps']}, MuJoCo "
+                 f"warnings {r['warnings']}, falls {r['falls']} (limit {r['fall_limit']:.0f}) "
+                 f"{'ok' if ok else 'FAIL'}")
+    return Checked(tuple(lines), failed, shares)
+
+
+def main(robots, actions, accuracy_actions, drive=None, room=None):
+    """Prints both checks for each robot; returns 0 if every robot passes, else 1."""
+    failed = 0
+    for robot in robots:
+        checked = check(robot, actions, accuracy_actions, drive, room)
+        for line in checked.lines:
+            print(line)
+        failed += checked.failed
     return 1 if failed else 0

@@ -15,12 +15,12 @@ def fail(path: pathlib.Path, field: str, message: str) -> NoReturn:
     raise MountError(f"{path}: {field}: {message}")
 
 
-def read(path: pathlib.Path) -> dict:
-    """The mount file's TOML as a dict."""
-    if not path.is_file():
+def read(path: pathlib.Path, text: str | None = None) -> dict:
+    """The mount file's TOML as a dict (text: the file's text, read from path if None)."""
+    if text is None and not path.is_file():
         raise MountError(f"no mount file at {path}")
     try:
-        return tomllib.loads(path.read_text())
+        return tomllib.loads(path.read_text() if text is None else text)
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
         raise MountError(f"{path}: not a TOML file: {e}") from None
     except ValueError as e:  # an integer past Python's 4300 digits

@@ -61,11 +61,12 @@ def resolve_file(text: str, where: str, mount_path: pathlib.Path) -> pathlib.Pat
     return path
 
 
-def parse(path: str | pathlib.Path) -> Mount:
+def parse(path: str | pathlib.Path, text: str | None = None) -> Mount:
     """The Mount of a mount file; MountError on any bad field (the file is not compiled
-    here: `check` does that)."""
+    here: `check` does that). text: the file's text, for a mount not yet written at path
+    (`ebrl check --tune`'s candidates; its robot file is found beside path as ever)."""
     path = pathlib.Path(path).resolve()   # every error names it so (FILE: FIELD: problem)
-    data = read(path)
+    data = read(path, text)
     fields = Fields(path)
     drive, model, joints = _parse_top(fields, data)
     bumper = _parse_bumper(fields, data)
