@@ -7,6 +7,7 @@ process, whose file is the same for the same seed and whose measures are `ebrl c
 the file it wrote."""
 import os
 import re
+import time
 import tomllib
 
 import pytest
@@ -35,10 +36,11 @@ def _snapshot(folder):
 
 
 def _refused(folder, *args):
-    """`ebrl ARGS` in folder: exit 2, one line on stderr, nothing on stdout, nothing
-    written; the line."""
-    before = _snapshot(folder)
+    """`ebrl ARGS` in folder: exit 2 within seconds, one line on stderr, nothing on
+    stdout, nothing written; the line."""
+    before, started = _snapshot(folder), time.perf_counter()
     proc = ebrl_here(*args, cwd=folder)
+    assert time.perf_counter() - started < 10.0   # refused before any simulation
     assert proc.returncode == 2, proc
     assert proc.stdout == "" and "Traceback" not in proc.stderr, proc
     lines = proc.stderr.strip().splitlines()

@@ -32,9 +32,13 @@ import re
 import tempfile
 import time
 import tomllib
+from concurrent.futures import ProcessPoolExecutor
 
-from experiments.checks import robotcheck
+from experiments.checks import robotcheck, validate
+from experiments.running import pool as run_pool
 from experiments.running.worker import SINGLE_THREAD
+from tasks import mount as mounts
+from tasks.robots import MOUNTS, ROBOTS, mount_entry
 
 #: Trials asked of the sampler, and run at once, per batch.
 BATCH = 2
@@ -135,9 +139,9 @@ def _key(name):
 def rewrite(text, path, fields, header=None):
     """The mount's text with `fields` (fields_of's: time_scale in the top table, the gains
     in [action]) set, each on its own line (a line that gives it is rewritten, its comment
-    kept; one that does not is added); every other byte as it was, and `header` (a
-    comment) first. RewriteError when the text, read back, does not give exactly these
-    values and the input's others."""
+    kept; one that does not is added); every other byte as it was (but a newline ending
+    the last line), and `header` (a comment) first. RewriteError when the text, read
+    back, does not give exactly these values and the input's others."""
     lines = text.splitlines(keepends=True)
     if lines and not lines[-1].endswith("\n"):
         lines[-1] += "\n"
@@ -201,24 +205,20 @@ def _not_one_to_a_line(path, name):
 
 def evaluate(out, text, actions, accuracy_actions, room):
     """One trial: the check of the mount `text` as the file `out` (robotcheck.check)."""
-    from tasks import mount, robots
-    entry = robots.mount_entry(mount.parse(out, text))
+    entry = mount_entry(mounts.parse(out, text))
     return robotcheck.check(entry, actions, accuracy_actions, room=room, name=str(out))
 
 
 def _pool(workers):
     """The trials' processes: the run pool's start method (experiments.running.pool)."""
-    from concurrent.futures import ProcessPoolExecutor
-    from experiments.running import pool
-    return ProcessPoolExecutor(max_workers=workers, mp_context=pool.context())
+    return ProcessPoolExecutor(max_workers=workers, mp_context=run_pool.context())
 
 
 def search(mount_path, trials, seed, actions, accuracy_actions, room=None, first_pass=False,
            progress=True, report=print):
     """Runs the search (the module's docstring); returns (the tuned text, its fields, its
     Checked, the trial's number, the trials run, the start's fields and Checked)."""
-    import optuna
-    from tasks import mount as mounts
+    import optuna   # here, not at the top: the command line imports this module, and stays light
 
     mount_path = pathlib.Path(mount_path)
     out = output_path(mount_path)
@@ -235,7 +235,7 @@ def search(mount_path, trials, seed, actions, accuracy_actions, room=None, first
     results = []   # (number, fields, text, Checked, score)
     bar = None
     if progress:
-        from tqdm import tqdm
+        from tqdm import tqdm   # as optuna
         bar = tqdm(total=trials, unit="trial", dynamic_ncols=True, desc=f"tune {mount_path.name}")
     workers = max(1, min(BATCH, os.cpu_count() or 1))
     saved = {k: os.environ.get(k) for k in SINGLE_THREAD}
@@ -352,9 +352,6 @@ def check_args(robot, out):
     """The checks --tune makes before any work, each a ValueError of one line: a mount
     file (not a registered robot, a shipped mount or a robot file), an output that does
     not exist in a writable folder, and a mount whose fields --tune can rewrite."""
-    from experiments.checks import validate
-    from tasks import mount as mounts
-    from tasks.robots import MOUNTS, ROBOTS
     if robot in ROBOTS:
         raise ValueError(f"--tune: {robot!r} is a registered robot: its drive values are its "
                          "entry's in tasks/robots.py, not a mount's; --tune takes a mount "
