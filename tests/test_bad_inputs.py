@@ -16,7 +16,7 @@ import pytest
 from helpers import ROOT, ebrl_here
 from models import rooms
 from tasks import mount
-from tasks.realisations import gait
+from tasks.realisations import gait_parameters as gait
 
 ANT = (ROOT / "models" / "mounts" / "ant.toml").read_text()
 

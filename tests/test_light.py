@@ -36,10 +36,13 @@ def _run(argv):
     return status, loaded, done.stdout, "\n".join(said)
 
 
-@pytest.mark.parametrize("argv", [["--help"], ["run", "--help"], ["maze-study", "--help"]])
+@pytest.mark.parametrize("argv", [["--help"], ["run", "--help"], ["maze-study", "--help"],
+                                  ["robots"]])
 def test_help_loads_nothing_heavy(argv):
+    """The help, and `ebrl robots`' list (the registries and the shipped mounts parsed,
+    the gait's among them: tasks.realisations.gait_parameters)."""
     status, loaded, out, _ = _run(argv)
-    assert status == 0 and "usage: ebrl" in out
+    assert status == 0 and ("usage: ebrl" in out if argv[-1] == "--help" else "quadruped" in out)
     assert loaded == [], f"ebrl {' '.join(argv)} imported {loaded}"
 
 

@@ -18,6 +18,7 @@ from tasks.mount.fields import fail
 from tasks.mount.frame import base_frame, check_rests
 from tasks.mount.records import Action
 from tasks.mount.spec import actuator, file_actuator
+from tasks.realisations import gait_parameters
 
 #: The action kinds by name, in their registration order (the order ACTIONS lists them).
 KINDS: dict[str, type[Action]] = {}
@@ -422,7 +423,7 @@ class Gait(Action):
     #: The legs, as tasks.realisations.gait.Leg tuples (swing, lifts, held), in the mount's order.
     legs: tuple[tuple[str, tuple[str, ...], tuple[str, ...]], ...] = ()
     #: The [action.gait] table: (parameter, value) pairs, sorted
-    #: (tasks.realisations.gait.PARAMETERS).
+    #: (tasks.realisations.gait_parameters.PARAMETERS).
     parameters: tuple[tuple[str, float], ...] = ()
 
     def on_floor(self, spec):
@@ -430,7 +431,6 @@ class Gait(Action):
 
     @classmethod
     def parse(cls, fields, table, drive):
-        from tasks.realisations import gait
         listed = table.get("legs")
         if listed is None:
             fields.fail("action.legs", "missing: the legs, as [[action.legs]] tables of "
@@ -464,9 +464,10 @@ class Gait(Action):
         if not isinstance(g, dict):
             fields.fail("action.gait", "must be a table")
         for k, v in g.items():
-            if k not in gait.PARAMETERS:
-                fields.fail(f"action.gait.{k}", f"unknown key; valid: {', '.join(gait.PARAMETERS)}")
-            fields.within(v, gait.RANGES[k], f"action.gait.{k}")
+            if k not in gait_parameters.PARAMETERS:
+                fields.fail(f"action.gait.{k}",
+                            f"unknown key; valid: {', '.join(gait_parameters.PARAMETERS)}")
+            fields.within(v, gait_parameters.RANGES[k], f"action.gait.{k}")
         return cls(tuple(legs), tuple(sorted((k, float(v)) for k, v in g.items())))
 
     def claimed(self):
@@ -503,8 +504,8 @@ class Gait(Action):
                             for name in (swing, *lifts, *held)])
 
     def physics_attributes(self):
-        from tasks.realisations import gait
-        return {"gait": gait.PARAMETERS | dict(self.parameters), "legs": tuple(self.legs)}
+        return {"gait": gait_parameters.PARAMETERS | dict(self.parameters),
+                "legs": tuple(self.legs)}
 
     def check_task_config(self, config):
         from tasks.realisations import gait

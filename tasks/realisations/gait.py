@@ -45,55 +45,15 @@ import math
 
 import numpy as np
 
-from ebrl.readings import Range
 from tasks import navigation
 from tasks.actuators import OTHER_ADVICE, control_ranges, length_gains, model_kind, \
     model_why_other
 from tasks.kernels.gait import GaitRecord
 from tasks.kernels.gait import HELD, LIFT, SWING
 from tasks.mount.frame import rest_data
+from tasks.realisations.gait_parameters import PARAMETERS
 from tasks.simulator import mujoco
 from tasks.two_wheel import TwoWheel
-
-#: The gait's parameters (a mount's [action.gait] may set any of them) and defaults.
-PARAMETERS = {
-    "frequency": 1.0,          # CPG cycles per second
-    "amplitude": 0.45,         # hip sweep, rad (the ant's hips reach +-0.52)
-    "lift": 0.35,              # ankle lift in the swing, rad (the ant's ankles reach +-0.35)
-    "kp": 15.0,                # PD gain, control per rad
-    "kd": 1.0,                 # PD damping, control per rad/s
-    "heading_gain": 2.0,       # turn command per rad of heading error
-    "turn_tolerance": 0.01,    # rad: a turn ends within this of its target
-    "slow_down": 0.5,          # units: the move's forward command ramps down over these
-    "coast": 0.06,             # units: a move stops this short of its target (the body
-                               # coasts on as the legs return to rest)
-    "max_turn_seconds": 4.0,
-    "max_move_seconds": 6.0,
-    "settle_seconds": 0.3,     # at the end of each phase the legs return to rest
-    "control_substeps": 1,     # substeps per CPG and PD update
-    "feedback_seconds": 0.05,  # seconds between heading and distance feedback updates
-    "max_tilt": 30.0,          # degrees: a base tilted further at a phase's end has fallen
-}
-
-#: Each parameter's allowed values (a mount's [action.gait] is checked against them when
-#: it is parsed, tasks.mount.kinds.Gait).
-RANGES = {
-    "frequency": Range(float, 0.0, 100.0, low_open=True, high_note=" cycles per second"),
-    "amplitude": Range(float, 0.0, math.pi, high_note=" rad"),
-    "lift": Range(float, 0.0, math.pi, high_note=" rad"),
-    "kp": Range(float, 0.0, low_open=True),
-    "kd": Range(float, 0.0),
-    "heading_gain": Range(float, 0.0, low_open=True),
-    "turn_tolerance": Range(float, 0.0, math.pi, low_open=True, high_note=" rad"),
-    "slow_down": Range(float, 0.0),
-    "coast": Range(float, 0.0, 2.0, high_open=True, high_note=" units (a move is 2 at most)"),
-    "max_turn_seconds": Range(float, 0.0, 3600.0, low_open=True),
-    "max_move_seconds": Range(float, 0.0, 3600.0, low_open=True),
-    "settle_seconds": Range(float, 0.0, 3600.0),
-    "control_substeps": Range(int, 1, 1000),
-    "feedback_seconds": Range(float, 0.0, 3600.0, low_open=True),
-    "max_tilt": Range(float, 0.0, 180.0, low_open=True, high_note=" degrees"),
-}
 
 #: A leg as a mount lists it: its swing joint (moves the foot fore and aft), its lift
 #: joints (raise it), its held joints (an optional yaw, kept at rest); the file's names.
