@@ -36,7 +36,7 @@ from concurrent.futures import ProcessPoolExecutor
 
 from experiments.checks import robotcheck, validate
 from experiments.running import pool as run_pool
-from experiments.running.worker import SINGLE_THREAD
+from experiments.running import worker
 from tasks import mount as mounts
 from tasks.robots import MOUNTS, ROBOTS, mount_entry
 
@@ -238,10 +238,9 @@ def search(mount_path, trials, seed, actions, accuracy_actions, room=None, first
         from tqdm import tqdm   # as optuna
         bar = tqdm(total=trials, unit="trial", dynamic_ncols=True, desc=f"tune {mount_path.name}")
     workers = max(1, min(BATCH, os.cpu_count() or 1))
-    saved = {k: os.environ.get(k) for k in SINGLE_THREAD}
-    os.environ.update(SINGLE_THREAD)   # the workers' numpy and numba: one thread each
     try:
-        with _pool(workers) as pool:
+        # the workers' numpy and numba: one thread each
+        with worker.single_threaded(), _pool(workers) as pool:
             while len(results) < trials:
                 asked = [study.ask() for _ in range(min(BATCH, trials - len(results)))]
                 batch = []
@@ -267,11 +266,6 @@ def search(mount_path, trials, seed, actions, accuracy_actions, room=None, first
                 if first_pass and any(r[3].passed for r in results):
                     break
     finally:
-        for k, v in saved.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
         if bar is not None:
             bar.close()
     number, fields, tuned, checked, _ = min(results, key=rank)

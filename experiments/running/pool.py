@@ -20,9 +20,7 @@ def run(specs, workers, done):
     process (a segfault in native code, the out-of-memory killer) is then recorded
     with the signal while the others go on."""
     workers = workers or os.cpu_count() or 1
-    saved = {k: os.environ.get(k) for k in worker.SINGLE_THREAD}
-    os.environ.update(worker.SINGLE_THREAD)
-    try:
+    with worker.single_threaded():
         queue, deaths = list(specs), collections.Counter()
         while queue:
             lost, rest, exits = _pool(queue, workers, done)
@@ -38,12 +36,6 @@ def run(specs, workers, done):
                 again, suspects, exits = _pool(suspects, 1, done)
                 for spec in again:
                     done(spec, error=worker.WorkerDied.of(spec, exits[0] if exits else None))
-    finally:
-        for k, v in saved.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
 
 
 #: What the pool's server process imports once, before it forks each worker: the worker,

@@ -11,6 +11,7 @@ empty file PATH.NODE.ROBOT_CONDITION_seed_NNN, NODE the Ray node's id or "local"
 wait while PATH exists, so a test can take a Ray node away, or add one, with runs in
 flight. They exist for the tests of failure handling and are never set otherwise.
 """
+import contextlib
 import os
 import signal
 import sys
@@ -23,6 +24,22 @@ from experiments.running import execution
 SINGLE_THREAD = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
                                    "MKL_NUM_THREADS")}
 TEST_FAIL, TEST_CRASH, TEST_HOLD = "EBRL_TEST_FAIL", "EBRL_TEST_CRASH", "EBRL_TEST_HOLD"
+
+
+@contextlib.contextmanager
+def single_threaded():
+    """SINGLE_THREAD in this process's environment while the block runs (the workers it
+    starts inherit it), each variable as it was afterwards."""
+    saved = {k: os.environ.get(k) for k in SINGLE_THREAD}
+    os.environ.update(SINGLE_THREAD)
+    try:
+        yield
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
 
 
 def selected(variable, spec):
