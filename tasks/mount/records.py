@@ -33,10 +33,10 @@ class Beams:
 @dataclasses.dataclass(frozen=True)
 class Action:
     """How the drive's action reaches the robot: one subclass per action kind, registered
-    by name (tasks.mount.kinds.register), each a record of its [action] fields that
+    by name (tasks.mount.kinds.KINDS), each a record of its [action] fields that
     knows their parsing, its edit of the robot's MjSpec and the realisation it runs on
     (tasks.realisations)."""
-    #: The kind's name (the [action] table's kind), set by its registration.
+    #: The kind's name (the [action] table's kind), set in its class.
     name: ClassVar[str]
     #: The drives that take it.
     drives: ClassVar[tuple[str, ...]] = ()

@@ -1,6 +1,6 @@
 """The gait's parameters (tasks.realisations.gait) as a table a mount's [action.gait] is
 parsed against: their defaults and allowed values, in a module that imports no simulator
-(tasks.mount.kinds reads it when a mount is parsed, `ebrl robots` included)."""
+(tasks.mount.joint_kinds reads it when a mount is parsed, `ebrl robots` included)."""
 import math
 
 from ebrl.readings import Range
@@ -26,7 +26,7 @@ PARAMETERS = {
 }
 
 #: Each parameter's allowed values (a mount's [action.gait] is checked against them when
-#: it is parsed, tasks.mount.kinds.Gait).
+#: it is parsed, tasks.mount.joint_kinds.Gait).
 RANGES = {
     "frequency": Range(float, 0.0, 100.0, low_open=True, high_note=" cycles per second"),
     "amplitude": Range(float, 0.0, math.pi, high_note=" rad"),

@@ -6,7 +6,7 @@ tasks.kernels.wheel_motors, tasks.kernels.plan)."""
 
 from tasks import navigation
 from tasks.kernels.wheel_motors import WheelMotorsRecord
-from tasks.mount.kinds import MOTOR_ROLE, WHEEL_JOINTS
+from tasks.mount.joint_kinds import MOTOR_ROLE, WHEEL_JOINTS
 from tasks.realisations.wheels import Planned, wheel_geometry
 from tasks.simulator import mujoco
 
