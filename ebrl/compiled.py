@@ -61,6 +61,7 @@ content of all of ebrl/, tasks/ and experiments/ recompiles every kernel after a
 kernel reaches), must be set before the first decoration as well, and displaces a user's
 own NUMBA_CACHE_DIR.
 """
+import ast
 import functools
 import hashlib
 import os
@@ -119,7 +120,6 @@ def _bound(statements, names):
     """Adds to `names` what `statements` bind at their level (imports, definitions,
     assignments), into compound statements but not into functions and classes; False
     where a star import binds what the text does not name."""
-    import ast
     for node in statements:
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
             names.add(node.name)
@@ -141,7 +141,6 @@ def _bound(statements, names):
 @functools.lru_cache(maxsize=None)
 def _package_names(path, mtime, size):
     """The names a package's __init__.py binds itself, or None (a star import)."""
-    import ast
     with open(path, "rb") as f:
         names = set()
         return frozenset(names) if _bound(ast.parse(f.read()).body, names) else None
