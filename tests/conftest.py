@@ -47,6 +47,7 @@ _SHARED_FIXTURES = {"test_experiments.py": ("clean_run", "kill_clean"),
                     "test_pages.py": ("made",), "test_nothing_lost.py": ("reported_universe",)}
 
 
+@pytest.hookimpl(tryfirst=True)  # before xdist's own, which reads the marks to group
 def pytest_collection_modifyitems(config, items):
     for item in items:
         module = item.path.name
