@@ -161,10 +161,24 @@ def _own_names(module):
     return namespace if names is None else {k: v for k, v in namespace.items() if k in names}
 
 
+#: reached's answers in this process, by (own file, globals, their count): the kernels of
+#: one module share them, and a process that loads its kernels from the cache would
+#: otherwise walk the same modules' globals once per kernel (125 walks in one run).
+_REACHED = {}
+
+
 def reached(namespace, own_file):
     """The tracked source files, other than own_file, that a module with globals
     `namespace` reaches through its globals, transitively (sorted): the same files
-    whatever the process has imported (_own_names)."""
+    whatever the process has imported (_own_names). Once per module and process while
+    its globals stay as many (a module fully imported)."""
+    key = (own_file, id(namespace), len(namespace))
+    if key not in _REACHED:
+        _REACHED[key] = _reached(namespace, own_file)
+    return list(_REACHED[key])
+
+
+def _reached(namespace, own_file):
     modules = {getattr(m, "__file__", None): m for m in list(sys.modules.values())}
     own = _realpath(own_file)
     seen, todo = {own}, [namespace]
