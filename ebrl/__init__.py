@@ -65,7 +65,7 @@ forgetting (2.1)     least_reliable / oldest   kernels.least_reliable, kernels.o
                                                via kernels.learn
                      test_forgetting_least_reliable_or_oldest,
                      test_oldest_kernel_takes_the_smallest_time_stamp
-eq9_dead_zone        zero / keep               intrinsic.Intrinsic (hold) and
+eq9_dead_zone        keep / zero               intrinsic.Intrinsic (hold) and
   (eq 9)                                       intrinsic.avoid_by_accelerating(previous)
                      test_eq9_dead_zone_keep_repeats_the_previous_acceleration,
                      test_eq9_keep_is_reset_by_the_agent_at_a_trial_end_and_ignored_by_eq8

@@ -1,4 +1,5 @@
-"""Every agent parameter, with Table 1's values as defaults (column T's memory)."""
+"""Every agent parameter, with Table 1's values as defaults (column T's memory) and, for
+what the paper leaves open, the literal protocol's readings (ebrl.readings)."""
 import dataclasses
 
 from ebrl import readings
@@ -94,8 +95,10 @@ class Config:
 
 
 def paper_config(column: str, **overrides: object) -> Config:
-    """Table 1's parameters in column "T" or "F" (they differ in memory size), with
-    overrides."""
+    """Table 1's parameters in column "T" or "F" (they differ in memory size) and the
+    readings' defaults, which are the literal protocol's (the paper as written:
+    tasks.protocols.LITERAL), with overrides. The adopted protocol's learner is this with
+    its readings as overrides (experiments.running.execution)."""
     if column not in TABLE1_MEMORY:
         raise ValueError(f"unknown Table 1 column {column!r}; valid: {', '.join(TABLE1_MEMORY)}")
     return Config(**{"memory_size": TABLE1_MEMORY[column], **overrides})

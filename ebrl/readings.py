@@ -139,7 +139,7 @@ AGENT = (
     Reading("initial_reliability", "agent", Range(float, 0.0, 1.0), 1.0,
             "a new element's reliability"),
     Reading("initial_utility", "agent", Range(float), 0.0, "a new element's utility"),
-    Reading("utility_cutoff", "agent", Range(float, 0.0, 1.0), 1e-4,
+    Reading("utility_cutoff", "agent", Range(float, 0.0, 1.0), 0.0,
             "eq 6 stops where gamma^k falls below this"),
     Reading("variance_floor", "agent", Range(float, 0.0, low_open=True), 1e-6,
             "the floor of eq 2's variance V_i"),
@@ -163,8 +163,8 @@ AGENT = (
                   'there is no more room to store new experience"'),
     # eq 9: inside the dead zone the acceleration on that axis is 0, or the fallback's
     # previous acceleration on that axis is kept (0 again after a trial's end).
-    Reading("eq9_dead_zone", "agent", ("zero", "keep"), "zero",
-            "eq 9's 'not changed': zero acceleration, or the previous one kept",
+    Reading("eq9_dead_zone", "agent", ("keep", "zero"), "keep",
+            "eq 9's 'not changed': the previous acceleration kept, or zero",
             behaviours=("eq9-10",), conditions=("avoidance",), fallback=True),
     # 3.4: with probability intrinsic_random_rate the random action replaces the avoidance
     # action, or is added to it (the sum clipped to [-1, 1]).

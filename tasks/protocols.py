@@ -2,9 +2,10 @@
 
 A protocol is a name, a version and readings: the values it gives the details the paper
 leaves open (and the words it reads), over the registry's defaults (tasks/readings.py,
-ebrl/readings.py). Section 3.6's procedure itself (50 seeds, two robots, two
-conditions, the paper's budgets) is the runner's (experiments.running); what a run
-computes is named by its protocol and PROTOCOL_VERSION, both recorded in every run.
+ebrl/readings.py), which are the literal protocol's: the paper as written is what a
+reading is when no protocol names it (ebrl.paper_config, ebrl.Config()). Section 3.6's
+procedure itself (50 seeds, two robots, two conditions, the paper's budgets) is the
+runner's (experiments.running); what a run computes is named by its protocol and PROTOCOL_VERSION, both recorded in every run.
 
 - "adopted" (the default; `ebrl run`): this replication's current readings, fitted
   where docs/interpretation.md says, "The adopted readings": one set for every robot
@@ -62,20 +63,27 @@ class Protocol:
 #: protocol 8's body the two-wheel robot passed 6 of its 8 stated tests at 0.2 against 4 at
 #: 0.3 and 0.4 (at least 2 more), so the floating robot's counts from protocol 7's fit
 #: (seeds 7000-7049: 5 of 6 at 0.2, 6 at 0.3) were added: 11 against 10
-#: (docs/protocol8_fit.md). Every other learner reading is its registry default (the
-#: cutoff of eq 6, utility_cutoff, included: 1e-4).
-LEARNER = (("policy_threshold", 0.2),)
+#: (docs/protocol8_fit.md). The cutoff of eq 6 (utility_cutoff) is 1e-4, as every adopted
+#: run has recorded (the registry's default until the defaults became the literal
+#: protocol's, eq 6 as printed: none, 0.0). Every other learner reading is the literal one.
+LEARNER = (("policy_threshold", 0.2), ("utility_cutoff", 1e-4))
 #: The fallback (protocol 7's, kept), one for both drives (Section 3.4 describes its random action
 #: once, "in both types of experiments"): every random action Section 3.4's Gaussian
 #: (stated: the random walk's, the 20% and the exploration's), and the 20% replacing the
 #: avoidance action (the plain reading; `add` was not better by the rule written before
 #: the fit, on seeds 7000-7099's first trials).
 FALLBACK = (("random_demand", "gaussian"), ("random_in_avoidance", "replace"))
+#: Two readings of the floating drive alone at the values every adopted run has recorded
+#: (a run's parameters name every reading, those that do not act on its robot included),
+#: the registry's defaults until they became the literal protocol's: so that every run
+#: made, and every record of the multiverse, still matches a rerun. The floating drive's
+#: and robot's own values follow (drives, robots).
+RECORDED = (("bump", "grip"), ("eq9_dead_zone", "zero"))
 
 #: Protocol 8 (docs/interpretation.md, "The adopted readings (protocol 8)").
 ADOPTED = Protocol(
     "adopted", PROTOCOL_VERSION,
-    readings=LEARNER + FALLBACK,
+    readings=LEARNER + FALLBACK + RECORDED,
     drives=MappingProxyType({
         # The leftover turn away from the nearer side for the drive's other robots
         # (diff_drive, the car, the Ant, the quadruped: protocol 5's stage-1 reading, not

@@ -19,10 +19,11 @@ TASK = (
             paper='Section 3.3: "the action also includes some amount of fluctuation by '
                   'maximum 5% discount from demanded value in both turning angle and moving '
                   'length" (the two wheels robot; the floating robot\'s is open)'),
-    # "grip": the bumper's friction takes the motion into the wall and most along it;
-    # "stop": the velocity set to zero at contact; "slide": frictionless walls, the motion
-    # along the wall kept; "bounce": the velocity reflected off the wall (restitution).
-    Reading("bump", "task", ("grip", "stop", "slide", "bounce"), "grip",
+    # "stop": the velocity set to zero at contact (the literal protocol's: "moves ...
+    # until it bumps"); "grip": the bumper's friction takes the motion into the wall and
+    # most along it; "slide": frictionless walls, the motion along the wall kept;
+    # "bounce": the velocity reflected off the wall (restitution).
+    Reading("bump", "task", ("stop", "grip", "slide", "bounce"), "stop",
             "the floating robot at a wall",
             drives=("floating",)),
     Reading("radius", "task",

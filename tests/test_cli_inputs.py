@@ -72,8 +72,8 @@ CASES = [
     (["run", "--set", "recall_size=2000"], "must be at least recall_size"),
     (["run", "--set", "alpha=0.3", "--set", "alpha=0.4"], "more than once"),
     # run: readings, against their registry entries (tasks.readings)
-    (["run", "--set", "bump=wobble"], "bump must be one of grip, stop, slide, bounce, got 'wobble'"),
-    (["run", "--set", "eq9_dead_zone=sideways"], "eq9_dead_zone must be one of zero, keep"),
+    (["run", "--set", "bump=wobble"], "bump must be one of stop, grip, slide, bounce, got 'wobble'"),
+    (["run", "--set", "eq9_dead_zone=sideways"], "eq9_dead_zone must be one of keep, zero"),
     (["run", "--set", "radius=0"], "radius must be positive"),
     (["run", "--set", "radius=9"], "radius must be at most 5 units"),
     (["run", "--set", "restitution=2"], "restitution must be at most 1"),

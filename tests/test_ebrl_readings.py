@@ -329,8 +329,8 @@ def test_eq7_decided_only_counts_an_element_once_and_forgets_its_flag():
 def test_eq9_dead_zone_keep_repeats_the_previous_acceleration():
     west, north = np.eye(8)[4], np.eye(8)[2]  # E, NE, N, NW, W, SW, S, SE
     quiet = np.full(8, 0.1)                   # b = 0 on both axes: the dead zone
-    zero = intrinsic.fallback_for("eq9-10", "avoidance", 0.0)
-    keep = intrinsic.fallback_for("eq9-10", "avoidance", 0.0, eq9_dead_zone="keep")
+    zero = intrinsic.fallback_for("eq9-10", "avoidance", 0.0, eq9_dead_zone="zero")
+    keep = intrinsic.fallback_for("eq9-10", "avoidance", 0.0)  # the default: the literal one
     rng = np.random.default_rng(0)
     # West only: b_h = 0.5 -> 1/3; b_v = 0 (dead zone).
     np.testing.assert_array_equal(zero(west, rng), [1 / 3, 0])

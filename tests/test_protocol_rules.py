@@ -72,3 +72,22 @@ def test_every_registered_robot_has_the_one_learner():
         mine = dataclasses.asdict(execution.RunSpec(name, "avoidance", 0, 10).agent_config())
         assert {k for k in base if base[k] != mine[k]} <= PER_ROBOT, name
         assert mine["random_demand"] == "gaussian"
+
+
+def test_one_default_per_reading_the_literal_protocols_and_paper_config_is_that_learner():
+    """A reading's registry default is the literal protocol's value (the paper as
+    written), so ebrl.paper_config, Table 1 and the defaults, builds the literal
+    protocol's learner for each paper robot, and ebrl.Config() column T's."""
+    import dataclasses
+
+    import ebrl
+    from tasks import readings as registry
+    from tasks.protocols import LITERAL
+    literal = dict(LITERAL.readings)
+    assert {r.name: r.default for r in registry.EVERY} == literal
+    for robot in PAPER_ROBOTS:
+        entry = ROBOTS[robot]
+        built = dataclasses.asdict(execution.RunSpec(robot, "avoidance", 0, 10,
+                                                     protocol="literal").agent_config())
+        assert dataclasses.asdict(ebrl.paper_config(entry.table1)) == built, robot
+    assert ebrl.Config() == ebrl.paper_config("T")

@@ -96,7 +96,7 @@ def test_the_configs_views_are_the_registrys_values_in_order():
     assert thrusters.BUMP_BOUNCE == registry.BY_NAME["bump"].values.index("bounce")
     assert two_wheel.BLOCKED_REFUSE == registry.BY_NAME["blocked_move"].values.index("refuse")
     assert two_wheel.LEFTOVER_AWAY == registry.BY_NAME["leftover_turn"].values.index("away")
-    assert registry.codes("bump", "slide", "grip") == (2, 0)
+    assert registry.codes("bump", "slide", "grip") == (2, 1)
     with pytest.raises(ValueError):
         registry.codes("bump", "sideways")
     for r in registry.EVERY:
@@ -110,7 +110,7 @@ def test_every_learner_carries_the_fallbacks_readings_with_their_defaults(name):
     for r in agent_registry.AGENT:
         if r.fallback:
             assert getattr(config, r.name) == r.default
-    with pytest.raises(ValueError, match="eq9_dead_zone must be one of zero, keep"):
+    with pytest.raises(ValueError, match="eq9_dead_zone must be one of keep, zero"):
         AGENTS[name].config(eq9_dead_zone="sideways")
 
 

@@ -215,7 +215,7 @@ def test_floating_bump_stops_the_motion_into_the_wall(vx, vy, slide):
     """The bumper grips (friction 1): the wall takes the speed into it and as much along
     it, so a head-on or 45-degree bump stops the puck and a shallow one slides on slower;
     at most a small rebound is left."""
-    env = quiet_env("floating", seed=0)
+    env = quiet_env("floating", seed=0, bump="grip")
     env.reset()
     env.physics.set_robot_pose(40.0, 3.0)
     for _ in range(2):  # two thrusts build the velocity, then the puck coasts into the wall
