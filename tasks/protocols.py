@@ -5,7 +5,8 @@ leaves open (and the words it reads), over the registry's defaults (tasks/readin
 ebrl/readings.py), which are the literal protocol's: the paper as written is what a
 reading is when no protocol names it (ebrl.paper_config, ebrl.Config()). Section 3.6's
 procedure itself (50 seeds, two robots, two conditions, the paper's budgets) is the
-runner's (experiments.running); what a run computes is named by its protocol and PROTOCOL_VERSION, both recorded in every run.
+runner's (experiments.running); what a run computes is named by its protocol and
+PROTOCOL_VERSION, both recorded in every run.
 
 - "adopted" (the default; `ebrl run`): this replication's current readings, fitted
   where docs/interpretation.md says, "The adopted readings": one set for every robot
