@@ -74,8 +74,8 @@ def check_behaviour(args, overrides=()):
     """--behaviour FILE: the genome for the selected robots (None without it)."""
     if args.behaviour is None:
         return None
-    from experiments.studies import evolve
-    return evolve.check_genome(args.behaviour, selected_robots(args), args.drive, overrides)
+    from experiments.checks import behaviour_file  # the simulator, past the light checks
+    return behaviour_file.check(args.behaviour, selected_robots(args), args.drive, overrides)
 
 
 def check_backend(backend):

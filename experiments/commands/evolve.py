@@ -47,6 +47,7 @@ def add_parser(subparsers):
 
 def _check(args):
     """Every argument checked before any work: (problem, storage URL)."""
+    from experiments.checks import behaviour_file
     from experiments.studies import evolve
     if args.population < 2:
         raise ValueError("--population must be at least 2 (CMA-ES keeps the better half)")
@@ -56,7 +57,7 @@ def _check(args):
     check_robots(args)
     entry = resolve(args.robot, args.drive)
     if args.start is not None:
-        start = evolve.check_genome(args.start, (args.robot,), args.drive)
+        start = behaviour_file.check(args.start, (args.robot,), args.drive)
     else:
         start = evolve.paper_genome(entry)
     names = evolve.fields(start, args.space, learning=not args.no_learning)

@@ -29,14 +29,14 @@ import json
 import math
 import pathlib
 
-import tasks
 from ebrl import behaviour as genomes
+from experiments.checks import behaviour_file
 from experiments.outputs import report
 from experiments.running import results
 from experiments.running import runner
 from experiments.running.execution import RunSpec
 from experiments.studies import study
-from tasks.robots import ROBOTS, resolve
+from tasks.robots import ROBOTS
 
 #: The search's radius of each field (of a vector's every entry) around the starting
 #: genome: each number is searched in [start - radius, start + radius], so CMA-ES's mean
@@ -85,35 +85,12 @@ def fields(genome, chosen="all", learning=True):
     return tuple(n for n in names if getattr(genome, n) is not None)
 
 
-def check_genome(path, robots, drive=None, overrides=()):
-    """`--behaviour FILE` for these robots: the genome, or ValueError (one line) when the
-    file is bad, its behaviour is not the robots' (eq8 for the two-wheel drive, eq9-10
-    for the floating one), its weights do not match a robot's beams, or a --set names a
-    field the genome sets."""
-    genome = genomes.load(path)
-    for robot in robots:
-        entry = resolve(robot, drive)
-        if entry.avoidance != genome.behaviour:
-            raise ValueError(f"behaviour file {path}: a {genome.behaviour} genome, but "
-                             f"{entry.name} uses {entry.avoidance}")
-        beams = range_beams(entry)
-        if genome.beams() != beams:
-            raise ValueError(f"behaviour file {path}: {genome.beams()} weights, but "
-                             f"{entry.name} has {beams} beams")
-    genome_sets = set(genomes.CONFIG_FIELDS.values()) | {"eq9_dead_zone"}
-    clash = sorted(k for k, _ in overrides if k in genome_sets)
-    if clash:
-        raise ValueError(f"--set {clash[0]} conflicts with --behaviour, which sets it; "
-                         "change the file instead")
-    return genome
-
-
 def paper_genome(entry):
     """The paper's rule for a robot's drive as a genome, with the robot's readings of the
     learning variables and the dead zone (its agent config, execution.RunSpec)."""
     drive = None if entry.name in ROBOTS else entry.drive  # a robot file: its drive
     config = RunSpec(entry.name, CONDITION, 0, 1, drive=drive).agent_config()
-    return genomes.paper(entry.avoidance, range_beams(entry), config)
+    return genomes.paper(entry.avoidance, behaviour_file.range_beams(entry), config)
 
 
 #: The paper's robots whose rules ship as behaviours/paper_<behaviour>.json.
@@ -129,15 +106,6 @@ def write_paper(folder):
     entries = [ROBOTS[r] for r in PAPER_FILE_ROBOTS]
     return [genomes.save(paper_genome(e), folder / f"paper_{e.avoidance}.json")
             for e in entries]
-
-
-def range_beams(entry):
-    """The number of rangefinder beams of a robot (its task, loaded once)."""
-    env = tasks.load(entry)
-    try:
-        return int(env.observation_spec()["range"].shape[0])
-    finally:
-        env.close()
 
 
 @dataclasses.dataclass
