@@ -344,3 +344,23 @@ def test_the_docs_list_every_factor_with_its_readings():
     held = section.split("**Held plain, not factors**")[1].split("\n\n")[0]
     assert all(f"`{name}`" in held for name in multiverse.HELD_PLAIN)
     assert f"`{mv.CHOICE}`" not in rows and "`DEFINITIONS`" in section
+
+
+def test_the_analysis_with_two_factor_effects_is_written_as_json():
+    """A full design identifies the two-factor effects, keyed (i, j) by analyse; the
+    multiverse's JSON names them by the keys (the first finished 10-seed run of the
+    design raised TypeError at its last write)."""
+    import itertools
+    import json
+
+    from experiments.outputs import multiverse as mv
+    codes = [list(c) for c in itertools.product((-1, 1), repeat=3)]
+    y = [1.0 + 2 * a + 0.5 * a * b for a, b, _ in codes]
+    effects = mv.fit_effects(codes, y)
+    assert effects["pairs"][(0, 1)] == pytest.approx(1.0)
+    analysis = {"c1": {"judged": 8, "effects": effects}, "c2": {"judged": 0, "effects": None}}
+    text = json.dumps(mv.analysis_json(analysis, ["a", "b", "c"]), sort_keys=True)
+    back = json.loads(text)
+    assert back["c1"]["effects"]["pairs"]["a x b"] == pytest.approx(1.0)
+    assert back["c1"]["effects"]["mains"][0] == pytest.approx(4.0)
+    assert back["c2"]["effects"] is None

@@ -172,7 +172,7 @@ def _report(args, chosen, design, universes, folder, specs, store, made):
                                "claims": {d: (records[(u.name, d)] or {}).get("claims")
                                           for d in mv.DEFINITIONS}}
                       for u in universes},
-        "analysis": analysis}))
+        "analysis": mv.analysis_json(analysis, mv.keys(factor_list, chosen))}))
     return mr.write(out, ctx), failed
 
 

@@ -315,6 +315,19 @@ def fit_effects(codes, y):
     return None
 
 
+def analysis_json(analysis, names):
+    """analyse's answer as JSON takes it: each claim's two-factor effects keyed "a x b" by
+    the keys' names (names: keys()'s), not by their (i, j) indices."""
+    out = {}
+    for claim, entry in analysis.items():
+        effects = entry.get("effects")
+        if effects is not None:
+            effects = dict(effects, pairs={f"{names[i]} x {names[j]}": e
+                                           for (i, j), e in effects["pairs"].items()})
+        out[claim] = dict(entry, effects=effects)
+    return out
+
+
 def keys(factor_list, chosen):
     """The keys the analysis reports on: the chosen factors', then the definition of steps
     per trial (CHOICE)."""
