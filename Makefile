@@ -1,5 +1,11 @@
 # Quick start: `make demo` and `make test`. Both create .venv and install the project.
 PYTHON ?= python3
+# Python writes the bytecode of the project's modules (and pytest its rewritten tests)
+# into __pycache__, where numba's cache already is, though the environment says not to:
+# with PYTHONDONTWRITEBYTECODE set, every process of the test suite (pytest's workers,
+# the commands they start, their pool and Ray workers) compiled the project's modules
+# from source again, and each pytest worker rewrote every test module (docs/speed.md).
+unexport PYTHONDONTWRITEBYTECODE
 VENV := .venv
 BIN := $(VENV)/bin
 DEMO_OUT ?= demo_results
@@ -27,16 +33,18 @@ INSTALL_TEST = $(PIP) install -q -e ".[test,ray]"
 SELF = true
 endif
 
-# One stamp per set of extras, redone when pyproject.toml or a lock changes.
+# One stamp per set of extras, redone when pyproject.toml or a lock changes. The test
+# lock holds the base lock's every package at its version (make lock), so one install of
+# it stands for both stamps: make test on a fresh clone runs pip once, not twice.
 $(VENV)/.installed: $(BIN)/python pyproject.toml requirements.lock
 	$(INSTALL_BASE)
 	$(SELF)
 	touch $@
 
-$(VENV)/.installed-test: $(VENV)/.installed requirements-test.lock
+$(VENV)/.installed-test: $(BIN)/python pyproject.toml requirements.lock requirements-test.lock
 	$(INSTALL_TEST)
 	$(SELF)
-	touch $@
+	touch $@ $(VENV)/.installed
 
 # uv in its own folder (.lock-tools), never in .venv; --fork-strategy fewest: one version
 # of each package for every Python from 3.11 on, the base lock the test lock's versions.
