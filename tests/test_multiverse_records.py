@@ -179,13 +179,28 @@ def test_a_study_resumes_from_its_records_on_a_fresh_folder(tmp_path):
     assert [s["runs_made"] for s in rebuilt.timing()] == [0]
     assert (whole / "multiverse.csv").read_bytes() == table
     # the report from the records alone (a fresh clone's committed records), no run made
+    # and as a page's section (--results): the user's text around it kept byte for byte
+    page = tmp_path / "page" / "RESULTS.md"
+    page.parent.mkdir()
+    page.write_bytes(b"# Mine\r\n\nkept \xc3\xa9\n")
     proc = ebrl_here("multiverse", "--universes", "2", "--seeds", "0-1", "--steps", "1500",
-                     "--report-only", "--records", fresh / "records", "--out", tmp_path / "r")
+                     "--report-only", "--records", fresh / "records", "--out", tmp_path / "r",
+                     "--results", page, "--figures", tmp_path / "page" / "figs")
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "r" / "multiverse.csv").read_bytes() == table
     assert not (tmp_path / "r" / "runs").exists()
     report = (tmp_path / "r" / "MULTIVERSE.md").read_text()
     assert "literal protocol" in report and "## Cost" in report and "2 call(s)" in report
+    text = page.read_bytes().decode("utf-8")
+    assert text.startswith("# Mine\r\n\nkept \u00e9\n")
+    block = text[text.index("<!-- ebrl multiverse: generated"):].replace("\r\n", "\n")
+    assert block.rstrip().endswith("<!-- ebrl multiverse: end -->")
+    assert "\n## How much the conclusions depend on the open details\n" in block
+    assert "\n### Cost\n" in block and "\n# " not in block
+    curves = sorted(p.name for p in (tmp_path / "r" / "figures").glob("spec_*.png"))
+    assert curves and sorted(p.name for p in (tmp_path / "page" / "figs").iterdir()) == \
+        [f"multiverse_{name}" for name in curves]
+    assert all(f"](figs/multiverse_{name})" in block for name in curves)
     # the first universe is the literal protocol's runs, the current one `ebrl run`'s, bit
     # for bit
     d, universes = multiverse.universes(multiverse.factors(), 3)

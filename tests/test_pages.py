@@ -174,12 +174,14 @@ def test_maze_study_refuses_a_broken_page_before_any_run(tmp_path, text, said):
 
 
 def _blocks():
+    from experiments.outputs import multiverse_report
     from experiments.studies import ablation, evolved, fit
     return {"ablate": (ablation.ABLATION_BEGIN, ablation.ABLATION_END),
-            "fit": (fit.FIT_BEGIN, fit.FIT_END), "evolve-report": (evolved.BEGIN, evolved.END)}
+            "fit": (fit.FIT_BEGIN, fit.FIT_END), "evolve-report": (evolved.BEGIN, evolved.END),
+            "multiverse": multiverse_report.BLOCK}
 
 
-@pytest.mark.parametrize("command", ["ablate", "fit", "evolve-report"])
+@pytest.mark.parametrize("command", ["ablate", "fit", "evolve-report", "multiverse"])
 def test_every_command_with_results_refuses_a_broken_page_before_any_work(tmp_path, command):
     begin, end = _blocks()[command]
     path = tmp_path / "RESULTS.md"
@@ -190,7 +192,9 @@ def test_every_command_with_results_refuses_a_broken_page_before_any_work(tmp_pa
     extra = {"ablate": ["--seeds", "1", "--steps", "5"],
              "fit": ["--trials", "1", "--figures", "figures"],
              "evolve-report": ["--hand", "hand", "--evolve", "evolve", "--evolved", "evolved",
-                               "--figures", "figures"]}[command]
+                               "--figures", "figures"],
+             "multiverse": ["--universes", "1", "--seeds", "0", "--steps", "5", "--figures",
+                            "figures"]}[command]
     out = "EVOLVE.md" if command == "evolve-report" else "out"
     proc = ebrl_here(command, *extra, "--results", path, "--out", out, cwd=tmp_path)
     _refused(proc, f"--results {path}: line 3: {begin} has no {end} after it")

@@ -51,6 +51,8 @@ def add_parser(subparsers):
     p.add_argument("--bench", action="store_true",
                    help="also measure the cost of a step (ebrl bench's fused loop) for the "
                         "report's floor (OUT/bench.json)")
+    arguments.add_results(p, "the page's section \"How much the conclusions depend on the "
+                             "open details\" (between its markers), its figures copied")
     arguments.add_no_progress(p)
     p.set_defaults(func=run)
 
@@ -61,6 +63,8 @@ def _check(args):
     if args.records is not None and not args.report_only:
         validate.output_folder(args.records, "--records")
     check_backend(args.backend)
+    from experiments.outputs.multiverse_report import BLOCK
+    arguments.check_results(args, BLOCK)
     keys = None if args.factors == "all" else \
         [k.strip() for k in args.factors.split(",") if k.strip()]
     chosen = multiverse.select(keys)
@@ -173,7 +177,10 @@ def _report(args, chosen, design, universes, folder, specs, store, made):
                                           for d in mv.DEFINITIONS}}
                       for u in universes},
         "analysis": mv.analysis_json(analysis, mv.keys(factor_list, chosen))}))
-    return mr.write(out, ctx), failed
+    path = mr.write(out, ctx)
+    if args.results is not None:
+        mr.publish(out, path.read_text(), args.results, args.figures)
+    return path, failed
 
 
 def run(args):

@@ -7,7 +7,9 @@ literal and the current protocols marked, and below it the grid of which factor 
 its alternative level in each universe.
 """
 import dataclasses
+import os
 import pathlib
+import re
 import warnings
 
 import numpy as np
@@ -22,6 +24,8 @@ from tasks.robots import PAPER_ROBOTS
 
 #: Machines of this many cores for the Ray estimate.
 RAY_CORES = 16
+#: The markers of the multiverse's block on a page (`ebrl multiverse --results`).
+BLOCK = ("<!-- ebrl multiverse: generated, do not edit -->", "<!-- ebrl multiverse: end -->")
 
 
 def _value(records, point, claim):
@@ -427,3 +431,24 @@ def write(out, ctx):
     results.atomic_write(path, markdown(ctx))
     return path
 
+
+def publish(out, text, page, figures_dir):
+    """MULTIVERSE.md's text as the page's block (BLOCK; the rest of the page kept byte for
+    byte), one heading level down (a section of RESULTS.md), its specification curves
+    copied into figures_dir as multiverse_<name>.png and linked from there."""
+    page, figures_dir = pathlib.Path(page), pathlib.Path(figures_dir)
+    figures_dir.mkdir(parents=True, exist_ok=True)
+    rel = pathlib.PurePosixPath(os.path.relpath(figures_dir, page.parent))
+    lines = []
+    for line in text.splitlines():
+        if line.startswith("#"):
+            line = "#" + line
+        link = re.fullmatch(r"!\[(.*)\]\(figures/(.+\.png)\)", line)
+        if link:
+            name = f"multiverse_{link[2]}"
+            report.copy(pathlib.Path(out) / "figures" / link[2], figures_dir / name)
+            line = f"![{link[1]}]({rel / name})"
+        lines.append(line)
+    begin, end = BLOCK
+    report.replace_block(page, begin, end, [begin, "", *lines, "", end])
+    return page

@@ -16,7 +16,8 @@ import re
 from experiments.running import results
 
 #: A marker of any of the tool's blocks (ebrl report, ebrl headline, ebrl ablate, ebrl
-#: fit, ebrl evolve-report, maze-study): one block's edit must never take another's.
+#: fit, ebrl evolve-report, ebrl multiverse, maze-study): one block's edit must never
+#: take another's.
 ANY_MARKER = re.compile(r"<!--\s*(?:ebrl\b|maze-study:)[^\n]*?-->")
 
 
