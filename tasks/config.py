@@ -9,7 +9,7 @@ from tasks import readings
 
 def _default(name):
     """A reading field's default: its registry entry's (tasks/readings.py)."""
-    return readings.BY_NAME[name].default
+    return readings.READING_BY_NAME[name].default
 
 
 @dataclasses.dataclass(frozen=True)

@@ -40,7 +40,7 @@ class Environment(control.Environment):
 
     @property
     def steps_compiled(self) -> bool:
-        """True when step() runs the task's compiled step (tasks.kernels.steps.step): not
+        """True when step() runs the task's compiled step (tasks.kernels.env_step.step): not
         switched off, and the observation not flattened (dm_control's hooks do that)."""
         return self.compiled and not self._flat_observation
 

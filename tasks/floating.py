@@ -10,7 +10,7 @@ is the drive's task: its constants, each episode's settings, its edit of the mod
 """
 import models
 from tasks import navigation
-from tasks.readings import BY_NAME
+from tasks.readings import READING_BY_NAME
 
 MAX_ACCELERATION = 0.2  # units per step, per step
 #: The velocity code's full scale (TaskConfig.velocity_code "code"), in units/step: the
@@ -49,10 +49,10 @@ class Floating(navigation.Navigation):
         physics.step_seconds = n * physics.timestep
         physics.set_bump(self.config.bump, self.config.restitution)
         return dict(n_thrust=1, n_coast=n - 1, max_acceleration=MAX_ACCELERATION,
-                    thrust=BY_NAME["thrust"].code(self.config.thrust),
+                    thrust=READING_BY_NAME["thrust"].code(self.config.thrust),
                     velocity=physics.step_seconds / physics.unit,
                     thrust_force=physics.thrust_scale(),
-                    velocity_code=BY_NAME["velocity_code"].code(self.config.velocity_code),
+                    velocity_code=READING_BY_NAME["velocity_code"].code(self.config.velocity_code),
                     velocity_full=VELOCITY_FULL_SCALE)
 
 

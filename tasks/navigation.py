@@ -22,7 +22,7 @@ from models import FRAME_SITE, NAMES_TEXT, PREFIX, UNIT, UNIT_NUMERIC, ContractE
 from tasks import placement
 from tasks import render
 from tasks.config import TaskConfig
-from tasks.kernels import bindings, body, sensing, steps
+from tasks.kernels import bindings, body, env_step, sensing
 from tasks.kernels.stream import TaskStream
 from tasks.simulator import dm_mujoco, mujoco
 
@@ -180,7 +180,7 @@ class Physics(dm_mujoco.Physics):
         self.n_beams = len(adr)
 
     #: The realisation's record class (an ebrl.records.Record of BODY_FIELDS and its own:
-    #: tasks.kernels.steps.DISPATCH).
+    #: tasks.kernels.env_step.DISPATCH).
     Record = None
 
     def phase_settings(self, n_turn, n_move):
@@ -319,12 +319,12 @@ class Physics(dm_mujoco.Physics):
 class Navigation(control.Task):
     """Reach the goal square from the jittered start; the realisation's compiled step acts.
 
-    An agent step is tasks.kernels.steps.step, one compiled call: the action clipped, the
+    An agent step is tasks.kernels.env_step.step, one compiled call: the action clipped, the
     realisation's action, the goal test, the range codes (and, floating, the velocity),
     on the step's draws from the task's buffered random stream (`draws`: the action
     noise's two uniforms, the sensor noise's normals, the velocity noise's). The dm_env
     hooks run it too: before_step runs the whole step, after_step and get_observation
-    hand on what it found; an episode's first observation is steps.observe. So the hooks
+    hand on what it found; an episode's first observation is env_step.observe. So the hooks
     and tasks.Environment's compiled step (`compiled_step`, the same call without
     dm_control's Python around it) are the same step, bit for bit. Each drive's task
     sets its episode's settings in initialize_episode (start_drive).
@@ -402,12 +402,12 @@ class Navigation(control.Task):
         return a
 
     def act(self, action, physics):
-        """The agent step (tasks.kernels.steps.step) on the checked action: the goal kept
+        """The agent step (tasks.kernels.env_step.step) on the checked action: the goal kept
         for get_reward and get_termination; returns its observation."""
         a = self.action_array(action)
         u, z, vz = self.draws()
         codes, velocity = self._sensed
-        status, n, goal = steps.step(physics.record, a, u, z, vz, codes, velocity)
+        status, n, goal = env_step.step(physics.record, a, u, z, vz, codes, velocity)
         self.finish(n, goal, physics, status)
         return self._observation()
 
@@ -455,7 +455,7 @@ class Navigation(control.Task):
 
     def get_observation(self, physics):
         """The last step's observation; without one (an episode's first, or dm_control's
-        observation_spec before any episode), steps.observe at the current state."""
+        observation_spec before any episode), env_step.observe at the current state."""
         if self._pending is not None:
             obs, self._pending = self._pending, None
             return obs
@@ -465,7 +465,7 @@ class Navigation(control.Task):
             self.start_drive(physics, **self.drive_settings(physics))
         _, z, vz = self.draws(acting=False)
         codes, velocity = self._sensed
-        steps.observe(physics.record, z, vz, codes, velocity)
+        env_step.observe(physics.record, z, vz, codes, velocity)
         return self._observation()
 
     def _observation(self):

@@ -1,5 +1,5 @@
 """The task's readings of the paper, one record each (ebrl.readings.Reading, the agent's
-record), and every reading of both for the commands (EVERY, BY_NAME, applies).
+record), and every reading of both for the commands (EVERY, READING_BY_NAME, applies).
 
 tasks.TaskConfig takes its reading fields' defaults from TASK and checks them with
 Reading.check; the kernels receive a switch as its code (Reading.code: its index in
@@ -71,7 +71,7 @@ TASK = (
 
 #: Every reading, the agent's then the task's.
 EVERY = agent_readings.AGENT + TASK
-BY_NAME = {r.name: r for r in EVERY}
+READING_BY_NAME = {r.name: r for r in EVERY}  # the agent's and the task's
 
 
 def applies(reading, robot, condition=None):
@@ -85,5 +85,5 @@ def applies(reading, robot, condition=None):
 def codes(name, *values):
     """The codes (ebrl.readings.Reading.code) of a switch's values, in the order asked:
     what a kernel module names its switch constants by, so they follow the registry."""
-    reading = BY_NAME[name]
+    reading = READING_BY_NAME[name]
     return reading.code(values[0]) if len(values) == 1 else tuple(map(reading.code, values))

@@ -15,7 +15,7 @@ geom pairs a move watches (`touch_pairs`) and each episode's settings.
 import numpy as np
 
 from tasks import navigation
-from tasks.readings import BY_NAME
+from tasks.readings import READING_BY_NAME
 from tasks.simulator import mujoco
 
 MAX_TURN = 1.0  # rad per step
@@ -58,8 +58,8 @@ class TwoWheel(navigation.Navigation):
         m = physics.model
         config = self.config
         return dict(max_turn=MAX_TURN, max_move=MAX_MOVE, tolerance=BLOCKED_TOLERANCE,
-                    blocked_move=BY_NAME["blocked_move"].code(config.blocked_move),
-                    leftover_turn=BY_NAME["leftover_turn"].code(config.leftover_turn),
+                    blocked_move=READING_BY_NAME["blocked_move"].code(config.blocked_move),
+                    leftover_turn=READING_BY_NAME["leftover_turn"].code(config.leftover_turn),
                     qpos0=np.empty(m.nq), qvel0=np.empty(m.nv), act0=np.empty(m.na),
                     pairs=touch_pairs(m.ptr, physics.body["base"]), fromto=np.empty(6))
 

@@ -72,7 +72,7 @@ def test_the_stamp_names_the_files_a_module_reaches():
     import experiments.running.fused as fused
     names = {p.rsplit("/", 2)[-2] + "/" + p.rsplit("/", 1)[-1]
              for p in compiled.reached(vars(fused), fused.__file__)}
-    assert {"ebrl/agent.py", "ebrl/kernels.py", "kernels/steps.py", "kernels/gait.py",
+    assert {"ebrl/agent.py", "ebrl/kernels.py", "kernels/env_step.py", "kernels/gait.py",
             "kernels/two_wheel.py", "kernels/thrusters.py"} <= names
 
 
@@ -160,7 +160,7 @@ def test_every_module_with_cached_kernels_imports_ebrl_compiled_itself():
     import ast
     from helpers import ROOT
     modules = _cached_kernel_modules()
-    assert {"ebrl.kernels", "ebrl.agent", "tasks.kernels.steps"} <= set(modules)
+    assert {"ebrl.kernels", "ebrl.agent", "tasks.kernels.env_step"} <= set(modules)
     missing = set()
     for path in modules.values():
         tree = ast.parse((ROOT / path).read_text())

@@ -305,7 +305,7 @@ def _ghost(tmp_path):
 def test_a_robot_that_leaves_the_room_raises(tmp_path):
     """Driven straight east from the start through the walls, the ghost leaves the room's
     floor within 45 steps: a PhysicsError that says so (the status OUTSIDE of
-    tasks.kernels.steps.step), not a silent run."""
+    tasks.kernels.env_step.step), not a silent run."""
     env = tasks.load(str(_ghost(tmp_path)), drive="two_wheel", seed=0, sensor_noise=0.0,
                      action_noise=0.0, start_jitter=False)
     try:
@@ -321,7 +321,7 @@ def test_a_robot_that_leaves_the_room_raises(tmp_path):
 
 @pytest.mark.slow
 def test_a_run_whose_robot_leaves_the_room_is_a_failed_run(tmp_path):
-    """The protocol's run (the compiled loop) of the ghost raises; recorded as a failed
+    """The run (the compiled loop) of the ghost raises; recorded as a failed
     run of the kind "left the room", named, never averaged."""
     spec = execution.RunSpec(str(_ghost(tmp_path)), "random", 0, 20_000, drive="two_wheel")
     with pytest.raises(control.PhysicsError, match="the robot left the room") as raised:

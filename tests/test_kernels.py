@@ -1,4 +1,4 @@
-"""The tasks' compiled step (tasks.kernels.steps.step) against dm_control's hooks (which call
+"""The tasks' compiled step (tasks.kernels.env_step.step) against dm_control's hooks (which call
 the drives' same kernels one hook at a time, drawing from the RandomState), step for step."""
 import contextlib
 

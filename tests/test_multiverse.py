@@ -73,8 +73,8 @@ def _acting(spec):
     """A run's agent and task readings that act on its robot and condition, as run."""
     config = dataclasses.asdict(spec.agent_config()) | dataclasses.asdict(spec.task_config())
     return {n: multiverse.effective(spec.robot, n, config[n]) for n in config
-            if n in registry.BY_NAME and registry.applies(registry.BY_NAME[n], ROBOTS[spec.robot],
-                                                          spec.condition)}
+            if n in registry.READING_BY_NAME
+            and registry.applies(registry.READING_BY_NAME[n], ROBOTS[spec.robot], spec.condition)}
 
 
 def _same_as_protocol(universe, protocol, overrides=True):
@@ -95,9 +95,9 @@ def test_no_factor_varies_a_stated_value_or_a_printed_equation():
     named = {n for f in multiverse.factors() for names in f.readings.values() for n in names}
     assert not named & set(multiverse.HELD_PLAIN)
     assert {"blocked_move", "eq7_walk", "random_demand"} <= set(multiverse.HELD_PLAIN)
-    assert all(name in registry.BY_NAME for name in multiverse.HELD_PLAIN)
+    assert all(name in registry.READING_BY_NAME for name in multiverse.HELD_PLAIN)
     assert [f.key for f in multiverse.factors()] == [f.key for f in multiverse.FACTORS]
-    assert named | set(multiverse.HELD_PLAIN) == set(registry.BY_NAME)  # each, one or other
+    assert named | set(multiverse.HELD_PLAIN) == set(registry.READING_BY_NAME)  # each, one or other
     for key in ("eq7_signal", "thrust"):  # both sides of the contradiction quoted
         sentence = next(f for f in multiverse.FACTORS if f.key == key).sentence
         assert sentence.count('"') >= 4 and "against it" in sentence, key
@@ -116,11 +116,11 @@ def test_the_factors_come_from_the_registry_and_the_protocols():
         assert len(named) == len(set(named))  # a reading in one factor only
         for f in factor_list:
             for name, value in f.alternatives:
-                registry.BY_NAME[name].check(value)
+                registry.READING_BY_NAME[name].check(value)
             lv = multiverse.levels(f, robot)
             for name, value in lv.plain.items():
                 assert value == dict(protocols.LITERAL.readings)[name]
-                registry.BY_NAME[name].check(lv.alternative[name])
+                registry.READING_BY_NAME[name].check(lv.alternative[name])
             if lv.source == "adopted":
                 assert all(multiverse.effective(robot, n, v) == multiverse.effective(
                     robot, n, multiverse.adopted_value(robot, n)) for n, v in lv.alternative.items())

@@ -65,7 +65,7 @@ def test_the_docs_table_has_one_row_per_registered_reading():
     rows = doc_rows()
     named = [r.split("|")[1].strip().strip("`") for r in rows]
     missing = [r.name for r in registry.EVERY if r.name not in named]
-    unknown = [n for n in named if n not in registry.BY_NAME]
+    unknown = [n for n in named if n not in registry.READING_BY_NAME]
     twice = sorted({n for n in named if named.count(n) > 1})
     hint = f"\ndocs/interpretation.md's table should read:\n{table()}"
     assert not missing, f"no row for {missing}{hint}"
@@ -83,7 +83,7 @@ def test_every_config_reading_field_takes_its_default_from_the_registry():
                 (r.default is None and fields[r.name].default is None), r.name
             assert fields[r.name].type is (str if r.switch else float), r.name
     assert not set(agent_registry.AGENT_BY_NAME) & {f.name for f in dataclasses.fields(TaskConfig)}
-    assert list(registry.BY_NAME) == [r.name for r in registry.EVERY]  # no name twice
+    assert list(registry.READING_BY_NAME) == [r.name for r in registry.EVERY]  # no name twice
 
 
 def test_the_configs_views_are_the_registrys_values_in_order():
@@ -92,10 +92,10 @@ def test_the_configs_views_are_the_registrys_values_in_order():
     assert config.FALLBACK_READINGS == ("eq9_dead_zone", "random_in_avoidance", "random_demand")
     # the kernels' switch constants are the registry's codes, whatever its order
     from tasks.kernels import thrusters, two_wheel
-    assert thrusters.THRUST_CLIPPED == registry.BY_NAME["thrust"].values.index("clipped")
-    assert thrusters.BUMP_BOUNCE == registry.BY_NAME["bump"].values.index("bounce")
-    assert two_wheel.BLOCKED_REFUSE == registry.BY_NAME["blocked_move"].values.index("refuse")
-    assert two_wheel.LEFTOVER_AWAY == registry.BY_NAME["leftover_turn"].values.index("away")
+    assert thrusters.THRUST_CLIPPED == registry.READING_BY_NAME["thrust"].values.index("clipped")
+    assert thrusters.BUMP_BOUNCE == registry.READING_BY_NAME["bump"].values.index("bounce")
+    assert two_wheel.BLOCKED_REFUSE == registry.READING_BY_NAME["blocked_move"].values.index("refuse")
+    assert two_wheel.LEFTOVER_AWAY == registry.READING_BY_NAME["leftover_turn"].values.index("away")
     assert registry.codes("bump", "slide", "grip") == (2, 1)
     with pytest.raises(ValueError):
         registry.codes("bump", "sideways")
@@ -133,13 +133,13 @@ def test_each_reading_takes_its_values_and_refuses_others_in_one_line(reading):
 
 def test_the_studies_take_values_scope_and_descriptions_from_the_registry():
     for a in ablation.READINGS:
-        r = registry.BY_NAME[a.name]
+        r = registry.READING_BY_NAME[a.name]
         assert a.what == r.what
         assert a.values == r.values if r.switch else all(r.values.problem(v) is None
                                                          for v in a.values)
     spaces = list(fit.SPACE) + [p for s in first_trials.SPACES.values() for p in s]
     for p in spaces:
-        r = registry.BY_NAME[p.name]
+        r = registry.READING_BY_NAME[p.name]
         assert p.what == r.what
         if r.switch:
             assert p.kind == "choice" and p.values == r.values
@@ -149,13 +149,13 @@ def test_the_studies_take_values_scope_and_descriptions_from_the_registry():
     from tasks.robots import ROBOTS
     for drive, params in first_trials.SPACES.items():
         robot = ROBOTS[first_trials.ROBOTS[drive]]
-        assert all(registry.applies(registry.BY_NAME[p.name], robot) for p in params)
+        assert all(registry.applies(registry.READING_BY_NAME[p.name], robot) for p in params)
 
 
 def test_applies_follows_the_drive_the_fallback_and_the_condition():
     from tasks.robots import ROBOTS
     two, floating = ROBOTS["two_wheel"], ROBOTS["floating"]
-    by = registry.BY_NAME
+    by = registry.READING_BY_NAME
     assert registry.applies(by["bump"], floating) and not registry.applies(by["bump"], two)
     assert registry.applies(by["blocked_move"], two)
     assert not registry.applies(by["blocked_move"], floating)
@@ -179,5 +179,5 @@ def test_every_robots_own_readings_are_registered_and_allowed():
     from tasks.robots import MOUNTS, ROBOTS, resolve
     for robot in list(ROBOTS.values()) + [resolve(m) for m in MOUNTS]:
         for name, value in robot.readings:
-            assert name in registry.BY_NAME, (robot.name, name)
-            assert registry.BY_NAME[name].check(value) == value
+            assert name in registry.READING_BY_NAME, (robot.name, name)
+            assert registry.READING_BY_NAME[name].check(value) == value

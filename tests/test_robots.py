@@ -296,9 +296,9 @@ def test_the_literal_protocol_lists_every_reading_once_and_reaches_the_run():
     from tasks import readings
     LITERAL = tasks.protocols.LITERAL.readings
     names = [name for name, _ in LITERAL]
-    assert sorted(names) == sorted(readings.BY_NAME) and len(set(names)) == len(names)
+    assert sorted(names) == sorted(readings.READING_BY_NAME) and len(set(names)) == len(names)
     for name, value in LITERAL:
-        readings.BY_NAME[name].check(value)
+        readings.READING_BY_NAME[name].check(value)
     for robot in ("two_wheel", "floating"):
         spec = RunSpec(robot, "avoidance", 0, 100, protocol="literal")
         configs = dataclasses.asdict(spec.agent_config()) | dataclasses.asdict(spec.task_config())

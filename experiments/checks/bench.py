@@ -1,6 +1,6 @@
 """`ebrl bench`: microseconds per agent step, by part, for every registered robot.
 
-Each robot runs the protocol's loop (avoidance condition) until the agent's memory
+Each robot runs Section 3.6's loop (avoidance condition) until the agent's memory
 is full, then times blocks of N more steps: env.step, the agent's act and learn
 (with the observation's conversion), and the whole loop; medians over the blocks.
 Beside them, the references the issues set: raw `mujoco.mj_step` over the same

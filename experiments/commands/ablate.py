@@ -34,12 +34,12 @@ def _readings(args):
     from experiments.studies import ablation
     names = [r.name for r in ablation.READINGS] if args.readings == "all" else \
         [n.strip() for n in args.readings.split(",") if n.strip()]
-    unknown = [n for n in names if n not in ablation.BY_NAME]
+    unknown = [n for n in names if n not in ablation.ABLATED_BY_NAME]
     if unknown or not names:
         raise ValueError(f"unknown reading {unknown[0] if unknown else args.readings!r}; "
-                         f"valid: {', '.join(ablation.BY_NAME)}")
+                         f"valid: {', '.join(ablation.ABLATED_BY_NAME)}")
     validate.once(names, "--readings")
-    return [ablation.BY_NAME[n] for n in names]
+    return [ablation.ABLATED_BY_NAME[n] for n in names]
 
 
 def _combos(args):

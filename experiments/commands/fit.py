@@ -74,12 +74,12 @@ def _check(args):
         raise ValueError("--robot is for --stage first-trial (the table's fit runs both robots)")
     if args.promote_seeds is None:
         args.promote_seeds = list(range(6))
-    names = tuple(fit.BY_NAME) if args.space == "all" else \
+    names = tuple(fit.PARAMETER_BY_NAME) if args.space == "all" else \
         tuple(n.strip() for n in args.space.split(",") if n.strip())
-    unknown = [n for n in names if n not in fit.BY_NAME]
+    unknown = [n for n in names if n not in fit.PARAMETER_BY_NAME]
     if unknown or not names:
         raise ValueError(f"unknown reading {unknown[0] if unknown else args.space!r} in --space; "
-                         f"valid: {', '.join(fit.BY_NAME)}")
+                         f"valid: {', '.join(fit.PARAMETER_BY_NAME)}")
     validate.once(names, "--space")
     if not set(args.seeds) <= set(args.promote_seeds):
         raise ValueError("--promote-seeds must include every seed of --seeds")

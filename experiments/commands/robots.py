@@ -8,7 +8,7 @@ def add_parser(subparsers):
 
 
 def run(args):
-    from tasks.readings import BY_NAME, applies
+    from tasks.readings import READING_BY_NAME, applies
     from tasks.robots import MOUNTS, ROBOTS, resolve
     print(f"{'robot':<12} {'drive':<10} {'Table 1':<8} {'budget':>8}  {'avoidance':<9} description")
     for r in ROBOTS.values():
@@ -18,7 +18,7 @@ def run(args):
           "on it (docs/interpretation.md; --set overrides):")
     for r in ROBOTS.values():
         text = ", ".join(f"{k}={v:.3g}" if isinstance(v, float) else f"{k}={v}"
-                         for k, v in r.readings if applies(BY_NAME[k], r))
+                         for k, v in r.readings if applies(READING_BY_NAME[k], r))
         print(f"{r.name:<12} {text or 'none: the literal protocol'}")
     print("\nMounted robot files, unchanged (models/mounts/*.toml; docs/adding_a_robot.md):")
     for name in MOUNTS:

@@ -108,7 +108,7 @@ def _arguments(entry, budget):
              f"({', '.join(rooms.MAPS)}), \"random:WxH:SEED\" or a map file "
              "([rooms](../rooms.md))")]
     for field in dataclasses.fields(TaskConfig):
-        reading = readings.BY_NAME.get(field.name)
+        reading = readings.READING_BY_NAME.get(field.name)
         if reading is not None and not readings.applies(reading, entry):
             continue
         what = FIELDS[field.name] if reading is None else reading.what

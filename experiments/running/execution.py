@@ -215,7 +215,7 @@ _NO_VELOCITY = np.zeros(0)
 
 
 class Trials:
-    """The protocol's loop over an environment and an agent: the agent learns at every
+    """Section 3.6's loop over an environment and an agent: the agent learns at every
     step; at the goal the trial ends (the agent's learn(last=True)) and the next starts
     from a reset. `run(steps)` goes on from where the last call stopped, step by step
     (act, env.step, learn) or, where experiments.running.fused supports the pair (EBRL

@@ -1,9 +1,9 @@
-"""The protocol's loop for a stretch of a trial in one compiled call: the speed path of
+"""Section 3.6's loop for a stretch of a trial in one compiled call: the speed path of
 `experiments.running.execution.execute`, with the same bits as its step-by-step loop.
 
 The step-by-step loop runs, per agent step, `ebrl.Agent.act`, `tasks.Environment.step`
 and `ebrl.Agent.learn`: each a little Python around one compiled function
-(`ebrl.agent.act_step`, `tasks.kernels.steps.step` with the task's draws
+(`ebrl.agent.act_step`, `tasks.kernels.env_step.step` with the task's draws
 `tasks.kernels.stream.task_draws`, `ebrl.steps.learn_step`, and at a goal
 `ebrl.agent.trial_end`). `run` iterates those same functions inside one numba call, up
 to a trial's end, on the same named records: the agent's (`Agent.record`, its numpy
@@ -32,7 +32,7 @@ from ebrl import records
 from ebrl.agent import act_step, invalid_observation, trial_end
 from tasks import navigation
 from tasks.kernels import bindings, body
-from tasks.kernels import steps as drive_steps
+from tasks.kernels import env_step
 from tasks.kernels.stream import task_draws
 
 #: Why a stretch ended.
@@ -103,7 +103,7 @@ def run(steps, agent, fallback, drive, stream, io, trace, first):
         if act_step(agent, fallback, io.obs, ranges) == agent_kernels.INVALID:
             return k, INVALID
         io.env_action[:] = agent.action
-        status, n, goal = drive_steps.step(drive, io.env_action, io.u, io.z, io.vz,
+        status, n, goal = env_step.step(drive, io.env_action, io.u, io.z, io.vz,
                                             io.codes, io.velocity)
         io.substeps += n
         if status != bindings.OK:

@@ -43,7 +43,7 @@ def run(specs, workers, done):
 #: (the command line imports it) and does not pull them in, so without them each worker
 #: would import MuJoCo, dm_control and numba again (docs/speed.md, "The test suite's time").
 PRELOAD = ["experiments.running.worker", "experiments.running.fused", "tasks.environment",
-           "tasks.kernels.steps", "ebrl.agent"]
+           "tasks.kernels.env_step", "ebrl.agent"]
 
 
 def context():

@@ -9,7 +9,7 @@ import dataclasses
 
 from experiments.running.learners import LEARNERS
 from tasks.config import TaskConfig
-from tasks.readings import BY_NAME
+from tasks.readings import READING_BY_NAME
 
 
 def _classes():
@@ -25,7 +25,7 @@ def kinds():
     for cls in _classes():
         default = cls()
         for f in dataclasses.fields(cls):
-            reading = BY_NAME.get(f.name)
+            reading = READING_BY_NAME.get(f.name)
             found[f.name] = reading.type if reading else type(getattr(default, f.name))
     return found
 
@@ -34,7 +34,7 @@ def check(name, value):
     """value for the setting name, or ValueError in one line where name is a reading of
     the paper and value not among its allowed values (tasks.readings; the configs check
     the rest, experiments.checks.validate.agent_configs)."""
-    return BY_NAME[name].check(value) if name in BY_NAME else value
+    return READING_BY_NAME[name].check(value) if name in READING_BY_NAME else value
 
 
 def default(name, entries=()):

@@ -38,7 +38,7 @@ class Ablated:
 
 def _ablated(name, values=None):
     """A switch tries every value of its registry entry; a number the values given here."""
-    reading = registry.BY_NAME[name]
+    reading = registry.READING_BY_NAME[name]
     return Ablated(reading, reading.values if reading.switch else values)
 
 
@@ -66,7 +66,7 @@ READINGS = (
     _ablated("recall_candidates"),
     _ablated("exploration"),
 )
-BY_NAME = {r.name: r for r in READINGS}
+ABLATED_BY_NAME = {r.name: r for r in READINGS}
 DEFAULT = "default"
 
 
@@ -93,8 +93,8 @@ def _concerns(changes, robot, condition):
     """Whether every ablated reading a cell changes acts on this robot (its drive, its
     fallback behaviour) and this condition (the registry's scope, tasks.readings.applies)."""
     entry = resolve(robot)
-    return all(registry.applies(BY_NAME[name].reading, entry, condition)
-               for name, _ in changes if name in BY_NAME)
+    return all(registry.applies(ABLATED_BY_NAME[name].reading, entry, condition)
+               for name, _ in changes if name in ABLATED_BY_NAME)
 
 
 def plan(robots, seeds, steps, readings, combos, room=None):

@@ -67,7 +67,7 @@ def param(name, bounds=None, scope=None):
     given: "both" for an agent reading that acts on every robot; the floating robot's
     alone for the rest (the task's readings, and eq9_dead_zone's eq 9-10 fallback): the
     floating robot is searched, the two-wheel robot is the constraint."""
-    reading = registry.BY_NAME[name]
+    reading = registry.READING_BY_NAME[name]
     if scope is None:
         scope = "both" if reading.scope == "agent" and not (reading.drives or reading.behaviours) \
             else "floating"
@@ -98,7 +98,7 @@ SPACE = (
     param("restitution", (0.0, 1.0)),
     param("radius", (1.0, 2.5)),
 )
-BY_NAME = {p.name: p for p in SPACE}
+PARAMETER_BY_NAME = {p.name: p for p in SPACE}
 
 
 def default(name, robot="floating"):
@@ -115,20 +115,20 @@ def overrides(params, robot):
     (so a setting equal to the defaults shares their runs)."""
     floating = resolve(robot).drive == "floating"
     chosen = {k: v for k, v in params.items()
-              if (BY_NAME[k].scope == "both" or floating) and v != default(k, robot)}
+              if (PARAMETER_BY_NAME[k].scope == "both" or floating) and v != default(k, robot)}
     return tuple(sorted(chosen.items()))
 
 
 @dataclasses.dataclass
 class Problem:
     """`ebrl fit` for experiments.studies.study: the space, a trial's runs, its score."""
-    names: tuple = tuple(BY_NAME)
+    names: tuple = tuple(PARAMETER_BY_NAME)
     rungs: tuple = ((0, 1), tuple(range(6)))
     steps: int = None  # None: each robot's budget
     room: str = None  # models.rooms' room; None: the paper's
 
     def distributions(self):
-        return {n: BY_NAME[n].distribution() for n in self.names}
+        return {n: PARAMETER_BY_NAME[n].distribution() for n in self.names}
 
     def specs(self, params, seeds):
         out = []
@@ -318,7 +318,7 @@ def tables(s, out, names):
         from tasks.robots import resolve
 
         def cell(target, n):  # a floating reading cannot move a two-wheel figure
-            if target != "objective" and BY_NAME[n].scope == "floating" and \
+            if target != "objective" and PARAMETER_BY_NAME[n].scope == "floating" and \
                     resolve(target.split("/")[0]).drive != "floating":
                 return "-"
             return f"{imp[target].get(n, 0):.2f}"

@@ -187,11 +187,11 @@ def adopted_value(robot, name):
     readings for it, else the registry's default)."""
     entry = ROBOTS[robot]
     readings = dict(protocols.ADOPTED.readings_for(entry.name, entry.drive, entry.own_readings))
-    return readings.get(name, registry.BY_NAME[name].default)
+    return readings.get(name, registry.READING_BY_NAME[name].default)
 
 
 def _acts(name, robot, condition=None):
-    return registry.applies(registry.BY_NAME[name], ROBOTS[robot], condition)
+    return registry.applies(registry.READING_BY_NAME[name], ROBOTS[robot], condition)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -234,7 +234,7 @@ def factors():
                     effective(robot, r.name, literal_value(r.name)):
                 extra.setdefault(r.name, []).append(drive)
     for name in sorted(extra):
-        reading = registry.BY_NAME[name]
+        reading = registry.READING_BY_NAME[name]
         out.append(Factor(name, f"{reading.what} (set apart by the adopted protocol)",
                           {d: (name,) for d in extra[name]}, (), reading.paper))
     return tuple(out)

@@ -12,17 +12,17 @@ The mirror of ebrl/kernels.py for the simulator side, one module per job:
 | `servos`, `wheels`, `wheel_motors`, `joint_motors`, `gait` | the family's realisations |
 | `plan` | the target plan and its controller (wheel_motors', joint_motors') |
 | `thrusters` | the floating drive's realisation and step |
-| `steps` | the dispatch table (`DISPATCH`); the entry points `step` (an agent step), `observe` |
+| `env_step` | the dispatch table (`DISPATCH`); the entry points `step` (an agent step), `observe` |
 
 Each realisation's record is an ebrl.records.Record of named fields (`<Name>Record` in
 the module of its name: tasks.realisations); tasks.navigation.Physics builds it. The
-dm_env hooks (tasks.navigation.Navigation) run the same `steps.step`, so each
+dm_env hooks (tasks.navigation.Navigation) run the same `env_step.step`, so each
 realisation's logic exists once. Every kernel is ``@njit(cache=True)`` with no fastmath:
 the same operations in the same order as the Python they replaced, so the same bits
 (tests/data/planar_traces_v*.npz, tests/test_kernels.py).
 
 The kernels live here rather than beside each realisation's Python
-(tasks.realisations) because `steps` compiles every realisation's kernels in, and the
-tasks' Python imports `steps`: kernels under the realisations' package would make an
+(tasks.realisations) because `env_step` compiles every realisation's kernels in, and the
+tasks' Python imports `env_step`: kernels under the realisations' package would make an
 import circle. This package's __init__ imports nothing.
 """

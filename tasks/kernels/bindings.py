@@ -72,7 +72,7 @@ mj_objectVelocity = types.ExternalFunction(
 
 #: A kernel's status: the step ran; MuJoCo flagged an unstable state (mjWARN_BADQACC);
 #: a free-joint robot tilted past navigation.MAX_TILT_DEGREES; the action is not finite;
-#: the robot's centre left the room's floor (tasks.kernels.steps.step).
+#: the robot's centre left the room's floor (tasks.kernels.env_step.step).
 OK, UNSTABLE, TIPPED, NOT_FINITE, OUTSIDE = 0, 1, 2, 3, 4
 
 OBJ_BODY = int(mujoco.mjtObj.mjOBJ_BODY)

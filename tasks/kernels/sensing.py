@@ -1,6 +1,6 @@
 """The robot's read-outs as compiled kernels: its pose, its rangefinders' distances and
 Section 3.2's code of them, its velocity. Called by every drive's compiled step
-(tasks.kernels.steps) and by tasks.navigation.Physics's read-outs, so each exists once."""
+(tasks.kernels.env_step) and by tasks.navigation.Physics's read-outs, so each exists once."""
 import math
 
 import numpy as np

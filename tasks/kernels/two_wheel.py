@@ -13,11 +13,11 @@ runs.)
 
 `act` is that logic. How a body turns by an angle or moves a distance is its
 realisation's: `act` takes the realisation's phases as arguments (turn, move, halt, and
-the save and restore of a refused move), and tasks.kernels.steps' table passes each
+the save and restore of a refused move), and tasks.kernels.env_step' table passes each
 realisation's own (servos, wheels, wheel_motors, joint_motors, gait).
 
 Not cached on disk itself (plain ``@njit``): it compiles in its realisation's phases, so
-it is cached inside the entry points of tasks.kernels.steps, whose module reaches every
+it is cached inside the entry points of tasks.kernels.env_step, whose module reaches every
 realisation (ebrl.compiled).
 """
 import math

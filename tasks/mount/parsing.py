@@ -11,7 +11,7 @@ from tasks.mount.frame import FORWARDS
 from tasks.mount.kinds import KINDS
 from tasks.mount.records import Action, Beams, Bumper, Mount
 from tasks.mount.spec import BEAMS
-from tasks.readings import BY_NAME
+from tasks.readings import READING_BY_NAME
 
 #: Joints of the base: its file's, a free joint added, slide x, slide y (and, for the
 #: two-wheel drive, hinge yaw) added in place of the base's own, or slides x, y (and z)
@@ -175,10 +175,10 @@ def _parse_action(fields, data, drive, joints) -> Action:
 def _parse_tables(fields, data, drive):
     """Mount.readings and Mount.check, from the readings and check tables."""
     fail = fields.fail
-    readings = fields.table(data.get("readings", {}), set(BY_NAME), "readings")
+    readings = fields.table(data.get("readings", {}), set(READING_BY_NAME), "readings")
     for k, v in readings.items():  # each through the readings' registry (tasks.readings)
         try:
-            BY_NAME[k].check(v)
+            READING_BY_NAME[k].check(v)
         except ValueError as e:
             fail(f"readings.{k}", str(e).removeprefix(f"{k} "))
     check = data.get("check", {})

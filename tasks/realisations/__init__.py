@@ -15,7 +15,7 @@ module of that name), the kernel module (tasks.kernels.<name>) and its record
 Every robot names its realisation in its registry entry (tasks.robots.Robot.realisation:
 the shipped robots by name, a mount by its action kind, a robot file by the contract's
 actuators it has), and tasks.load builds it from REALISATIONS alone. The compiled side's
-table is tasks.kernels.steps.DISPATCH, by the same names.
+table is tasks.kernels.env_step.DISPATCH, by the same names.
 """
 import dataclasses
 import importlib

@@ -7,11 +7,11 @@ import numpy as np
 from tasks import navigation
 from tasks.kernels import bindings, thrusters as kernels
 from tasks.kernels.thrusters import ThrustersRecord
-from tasks.readings import BY_NAME
+from tasks.readings import READING_BY_NAME
 from tasks.simulator import mujoco
 
 #: The bump reading (tasks/readings.py), whose code the coast reads.
-BUMPS = BY_NAME["bump"]
+BUMPS = READING_BY_NAME["bump"]
 
 
 class ThrustersPhysics(navigation.Physics):

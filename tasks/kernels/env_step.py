@@ -101,7 +101,7 @@ def _row(s):
 def action(s, a, u):
     """The realisation's action for the clipped action a and the noise's draws u: its
     DISPATCH row's; returns (status, substeps). Compiled code only."""
-    raise TypeError("tasks.kernels.steps.action runs in compiled code (step)")
+    raise TypeError("tasks.kernels.env_step.action runs in compiled code (step)")
 
 
 @overload(action)
@@ -115,7 +115,7 @@ def _action(s, a, u):
 def velocity(s, vel, noise):
     """The realisation's velocity reading into vel: its DISPATCH row's. Compiled code
     only."""
-    raise TypeError("tasks.kernels.steps.velocity runs in compiled code (observe, step)")
+    raise TypeError("tasks.kernels.env_step.velocity runs in compiled code (observe, step)")
 
 
 @overload(velocity)
