@@ -1,7 +1,7 @@
 """`ebrl check --tune`: a mount's open drive values found by `ebrl check`'s own measures.
 
 The open values are the mount's `time_scale` and the gains its action kind takes
-(tasks.mount.records.Action.gains: joint_motors' kp and kv, one per joint; wheel_motors'
+(tasks.mount.parsed.Action.gains: joint_motors' kp and kv, one per joint; wheel_motors'
 and wheels' kp and kv). Each trial writes them into the mount's text (nothing else of it
 changes), parses that text as the tuned file beside the input will be, and runs the
 check on it (experiments.checks.robotcheck.check: the accuracy over --accuracy-actions

@@ -53,7 +53,7 @@ to the robot's MjSpec).
 from tasks.mount.fields import MountError
 from tasks.mount.kinds import KINDS
 from tasks.mount.parsing import ACTIONS, DROPS, JOINTS, OPTIONS, parse, resolve_file
-from tasks.mount.records import Action, Beams, Bumper, Mount
+from tasks.mount.parsed import Action, Beams, Bumper, Mount
 from tasks.mount.spec import BEAMS, robot_spec
 
 __all__ = ["parse", "robot_spec", "Mount", "MountError", "Bumper", "Beams",

@@ -1,7 +1,7 @@
 """The action kinds that give a mount the paper's drives' contract: `servos` (the two-wheel
 drive's forward, turn and grip servos added on the base), `thrusters` (the floating drive's
 thrust on slides along x and y) and `actuators` (the file's own actuators mapped onto those
-contract names). Each a record of its [action] fields (tasks.mount.records.Action gives
+contract names). Each a record of its [action] fields (tasks.mount.parsed.Action gives
 the hooks); the table of every kind is tasks.mount.kinds. Nothing heavy is imported."""
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import dataclasses
 
 from tasks.mount.fields import fail
 from tasks.mount.frame import base_frame
-from tasks.mount.records import Action
+from tasks.mount.parsed import Action
 from tasks.mount.spec import actuator, file_actuator
 
 

@@ -1,7 +1,7 @@
 """The action kinds that drive a file's own joints: `wheels` and `wheel_motors` (two wheel
 hinges, by servos added on them or by the file's motors), `joint_motors` (the file's motors
 on a forward and a turn joint, under the target plan) and `gait` (legs walked by a CPG).
-Each a record of its [action] fields (tasks.mount.records.Action gives the hooks); the
+Each a record of its [action] fields (tasks.mount.parsed.Action gives the hooks); the
 table of every kind is tasks.mount.kinds. Nothing heavy is imported."""
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from typing import ClassVar
 from tasks.actuators import OTHER_ADVICE, joints_moved, spec_kind, spec_why_other
 from tasks.mount.fields import fail
 from tasks.mount.frame import check_rests
-from tasks.mount.records import Action
+from tasks.mount.parsed import Action
 from tasks.mount.spec import actuator, file_actuator
 from tasks.realisations import gait_parameters
 

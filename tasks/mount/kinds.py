@@ -4,7 +4,7 @@ written), listed in KINDS below: each a record of its fields that knows their pa
 which drives take it, what of the file it replaces, its edit of the robot's MjSpec, and
 the realisation it runs on (tasks.realisations: a kind's name is its realisation's, but
 `actuators`, which maps a file's actuators onto the servos' or the thrusters' contract
-names); tasks.mount.records.Action gives the hooks. The kinds that give the paper's
+names); tasks.mount.parsed.Action gives the hooks. The kinds that give the paper's
 drives' contract are in tasks.mount.drive_kinds, those that drive a file's own joints in
 tasks.mount.joint_kinds. Adding a kind is a class in one of them and its row here.
 
@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from tasks.mount.drive_kinds import Actuators, Servos, Thrusters
 from tasks.mount.joint_kinds import Gait, JointMotors, WheelMotors, Wheels
-from tasks.mount.records import Action
+from tasks.mount.parsed import Action
 
 #: The action kinds by name, in the order ACTIONS lists them.
 KINDS: dict[str, type[Action]] = {

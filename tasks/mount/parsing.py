@@ -9,7 +9,7 @@ from ebrl.readings import Range
 from tasks.mount.fields import Fields, MountError, read
 from tasks.mount.frame import FORWARDS
 from tasks.mount.kinds import KINDS
-from tasks.mount.records import Action, Beams, Bumper, Mount
+from tasks.mount.parsed import Action, Beams, Bumper, Mount
 from tasks.mount.spec import BEAMS
 from tasks.readings import READING_BY_NAME
 

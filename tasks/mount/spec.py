@@ -9,7 +9,7 @@ import math
 import models
 from tasks.mount import frame as frames
 from tasks.mount.fields import fail
-from tasks.mount.records import Mount
+from tasks.mount.parsed import Mount
 
 #: The beams' arrangement per drive (Section 3.2): (count, first angle, step) in degrees,
 #: counter-clockwise from the heading, leftmost first for the two-wheel robot's seven.
