@@ -28,8 +28,10 @@ from experiments.commands.arguments import seeds as parse_seeds
 from experiments.outputs import verdicts
 from experiments.running import results
 from experiments.studies import first_trials, grid
-from experiments.studies.walk import RADII, table
 
+#: The radii tried: from a robot with its seven beams to one that half fills a 10-unit
+#: corridor (the grid of protocol 7's walk study, docs/interpretation.md).
+RADII = (1.0, 1.367, 1.5, 2.0, 2.5, 3.0, 3.5)
 #: Chi-square(6)'s 95% point: a distance within it is one ours drawn as the paper's would
 #: give 19 times in 20 (first_trials.distance).
 BAR = 12.6
@@ -140,7 +142,7 @@ def main(argv=None):
                     workers=args.workers, progress=True)
     scores = {grid.name(s): score(r, len(args.seeds)) for s, r in runs.items()}
     chosen = choose(scores)
-    print(table(scores, ["distance", "random mean", "random sd", "random reached",
+    print(grid.table(scores, ["distance", "random mean", "random sd", "random reached",
                          "avoidance mean", "avoidance sd", "avoidance reached"]))
     print(f"\nchosen: {chosen} (bar {BAR}; the literal body is taken within it)")
     args.out.mkdir(parents=True, exist_ok=True)

@@ -1,6 +1,7 @@
 """Settings of a robot's readings, each run on the same seeds, each in its own folder: the
-first-trial grids of issue 48 (the walk study, `experiments.studies.walk`, and protocol 7's
-body fits) and any other set of `--set` settings run side by side.
+first-trial grids of issue 48 (the walk study, `experiments/studies/walk.py` at commit
+f9a3f0f, and protocol 7's body fits), protocol 8's body fit (body_fit) and any other set of
+`--set` settings run side by side.
 
 A setting is a tuple of (reading, value) pairs, given to every run as its overrides
 (`ebrl run --set`); its runs go to OUT/<robot>/<setting's name>/, as `ebrl run --out` would
@@ -70,3 +71,17 @@ def summary(values, budget):
 def paper_first_trial(drive, condition):
     """The paper's first-trial figures of a drive and condition (experiments.paper)."""
     return paper.FIRST_TRIALS[(drive, condition)]
+
+
+def table(rows, columns):
+    """A markdown table of {setting name: {column: value}} rows."""
+    lines = ["| setting | " + " | ".join(columns) + " |",
+             "|---|" + "---:|" * len(columns)]
+    for setting, row in rows.items():
+        cells = []
+        for c in columns:
+            v = row.get(c)
+            cells.append("-" if v is None else (f"{v:,.3f}" if isinstance(v, float) and abs(v) < 10
+                                                else f"{v:,.0f}" if isinstance(v, float) else str(v)))
+        lines.append(f"| {setting} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
