@@ -43,7 +43,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 from numba import njit
 
-from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl import intrinsic, kernels, steps
 from ebrl.config import Config, reading_code
 from ebrl.kernels import DECIDERS, EXPLORATION, FALLBACK, INVALID, eq1, eq5

@@ -18,10 +18,11 @@ import numpy as np
 from llvmlite import binding
 from numba import njit, types
 
-from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
-from ebrl import records
+from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from compiled import records
+from compiled.clip import clip_unit
 from ebrl.config import CONDITIONS, READINGS, check_reading
-from ebrl.kernels import INTRINSIC, RANDOM, clip_unit
+from ebrl.kernels import INTRINSIC, RANDOM
 
 THETA = 0.25  # eq 9's sensitivity threshold for the floating robot
 

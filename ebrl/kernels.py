@@ -31,7 +31,7 @@ and recall-table switches act at a trial's end, in ebrl.Agent.end_episode.
 import numpy as np
 from numba import njit
 
-from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl.readings import codes
 
 INVALID = -2  # act's answer for an observation that is not finite or whose square overflows
@@ -353,14 +353,3 @@ def learn(x, action, reward, step, size, tail, referred, inputs, sums, variance,
             eq7(rel, prev, referred, r7, rho, time, discount, cutoff, walk)
     time_discount(rel, size, decay)
     return size, tail, referred
-
-
-@njit(cache=True)
-def clip_unit(a):
-    """a clipped to [-1, 1] in place, as np.clip (Section 3.4's random action is clipped;
-    ebrl.intrinsic's fallbacks use it too)."""
-    for i in range(a.shape[0]):
-        v = a[i]
-        v = v if v > -1.0 else -1.0
-        a[i] = v if v < 1.0 else 1.0
-    return a

@@ -6,10 +6,11 @@ the same functions on the same record. The equations themselves are ebrl.kernels
 kernel each. Every function is ``@njit(cache=True)`` with no fastmath (ebrl.kernels)."""
 from numba import njit
 
-from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
-from ebrl import records
+from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from compiled import records
+from compiled.clip import clip_unit
 from ebrl.kernels import EQ7_REWARD, EQ7_SURPRISE_RATE, EXPLORATION, EXPLORED, FALLBACK, \
-    INVALID, MEMORY, NO_EXCLUSION, act, clip_unit, eq5, learn
+    INVALID, MEMORY, NO_EXCLUSION, act, eq5, learn
 
 
 #: The record's fields, in the constructor's order.

@@ -179,7 +179,7 @@ class Physics(dm_mujoco.Physics):
         #: Rangefinders (the sensor noise draws one normal for each).
         self.n_beams = len(adr)
 
-    #: The realisation's record class (an ebrl.records.Record of BODY_FIELDS and its own:
+    #: The realisation's record class (a compiled.records.Record of BODY_FIELDS and its own:
     #: tasks.kernels.env_step.DISPATCH).
     Record = None
 

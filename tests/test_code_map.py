@@ -6,7 +6,7 @@ import re
 
 from helpers import ROOT
 
-PACKAGES = ("models", "tasks", "experiments", "ebrl")
+PACKAGES = ("models", "tasks", "experiments", "ebrl", "compiled")
 #: A module's line: a list item that opens with its path, "- `tasks/robots.py`: ...".
 LINE = re.compile(r"^- `((?:%s)/[\w/]*\.py)`: \S" % "|".join(PACKAGES), re.MULTILINE)
 #: Any path of a module of these packages written anywhere on the page.

@@ -1,4 +1,4 @@
-"""ebrl.compiled: numba's on-disk cache follows every file a cached kernel compiles in,
+"""compiled.cache: numba's on-disk cache follows every file a cached kernel compiles in,
 in real processes on real files (a kernel in one module calling a kernel in another)."""
 import os
 import pathlib
@@ -40,7 +40,7 @@ def _run(folder, env=None):
 
 def _project(folder, install):
     (folder / "caller.py").write_text(CALLER.format(
-        install="import ebrl.compiled  # noqa: F401" if install else ""))
+        install="from compiled import cache  # noqa: F401" if install else ""))
     (folder / "main.py").write_text(MAIN)
 
 
@@ -54,8 +54,8 @@ def test_a_change_in_a_called_kernels_file_recompiles_the_caller(tmp_path):
 
 
 def test_numba_alone_keeps_the_stale_caller(tmp_path):
-    """What ebrl.compiled is for: without it, numba loads the caller compiled with the
-    old callee (if numba learns to track this, ebrl.compiled can go)."""
+    """What compiled.cache is for: without it, numba loads the caller compiled with the
+    old callee (if numba learns to track this, compiled.cache can go)."""
     _project(tmp_path, install=False)
     (tmp_path / "callee.py").write_text(CALLEE.format(scale=3.0))
     assert _run(tmp_path) == (7.0, 0)
@@ -64,14 +64,15 @@ def test_numba_alone_keeps_the_stale_caller(tmp_path):
 
 
 def test_the_stamp_names_the_files_a_module_reaches():
-    from ebrl import agent, compiled
-    reached = compiled.reached(vars(agent), agent.__file__)
+    from compiled import cache
+    from ebrl import agent
+    reached = cache.reached(vars(agent), agent.__file__)
     names = {p.rsplit("/", 2)[-2] + "/" + p.rsplit("/", 1)[-1] for p in reached}
     assert {"ebrl/kernels.py", "ebrl/intrinsic.py", "ebrl/config.py"} <= names
     assert not any("site-packages" in p or p.endswith("agent.py") for p in reached)
     import experiments.running.fused as fused
     names = {p.rsplit("/", 2)[-2] + "/" + p.rsplit("/", 1)[-1]
-             for p in compiled.reached(vars(fused), fused.__file__)}
+             for p in cache.reached(vars(fused), fused.__file__)}
     assert {"ebrl/agent.py", "ebrl/kernels.py", "kernels/env_step.py", "kernels/gait.py",
             "kernels/two_wheel.py", "kernels/thrusters.py"} <= names
 
@@ -98,7 +99,7 @@ def test_a_kernels_stamp_is_the_same_whatever_else_the_process_imported(tmp_path
     (tmp_path / "pkg" / "other.py").write_text("X = 1\n")
     (tmp_path / "caller.py").write_text(CALLER.replace("import callee", "import pkg")
                                         .replace("callee.f", "pkg.f")
-                                        .format(install="import ebrl.compiled  # noqa: F401"))
+                                        .format(install="from compiled import cache  # noqa: F401"))
     (tmp_path / "main.py").write_text(PACKAGE_MAIN)
 
     def run(*other):
@@ -119,7 +120,7 @@ def test_no_kernel_reaches_a_submodule_through_its_package():
     import ast
     import importlib
     from helpers import ROOT
-    from ebrl import compiled
+    from compiled import cache
     found = []
     for name, rel in _cached_kernel_modules().items():
         module = importlib.import_module(name)
@@ -131,8 +132,8 @@ def test_no_kernel_reaches_a_submodule_through_its_package():
             for attr in ast.walk(node):
                 if isinstance(attr, ast.Attribute) and isinstance(attr.value, ast.Name):
                     package = vars(module).get(attr.value.id)
-                    if (hasattr(package, "__path__") and compiled._tracked(package.__file__)
-                            and attr.attr not in compiled._own_names(package)):
+                    if (hasattr(package, "__path__") and cache._tracked(package.__file__)
+                            and attr.attr not in cache._own_names(package)):
                         found.append(f"{rel}: {node.name}: {attr.value.id}.{attr.attr}")
     assert found == []
 
@@ -141,21 +142,21 @@ def _cached_kernel_modules():
     """{module name: path} of the checkout's modules that define a cached kernel."""
     from helpers import ROOT
     found = {}
-    for package in ("ebrl", "tasks", "experiments", "models"):
+    for package in ("compiled", "ebrl", "tasks", "experiments", "models"):
         for path in sorted((ROOT / package).rglob("*.py")):
-            if re.search(r"^@njit\(cache=True\)", path.read_text(), re.M) and path.name != "compiled.py":
+            if re.search(r"^@njit\(cache=True\)", path.read_text(), re.M):
                 rel = path.relative_to(ROOT)
                 found[".".join(rel.with_suffix("").parts)] = rel.as_posix()
     return found
 
 
-#: Modules with cached kernels that do not import ebrl.compiled themselves yet (covered
+#: Modules with cached kernels that do not import compiled.cache themselves yet (covered
 #: through their package's or their imports' import of it): empty once each has the line.
 NOT_YET = set()
 
 
-def test_every_module_with_cached_kernels_imports_ebrl_compiled_itself():
-    """The rule (ebrl.compiled's docstring): the hook is then in place before the module's
+def test_every_module_with_cached_kernels_imports_the_cache_itself():
+    """The rule (compiled.cache's docstring): the hook is then in place before the module's
     first decoration, whatever was imported before it."""
     import ast
     from helpers import ROOT
@@ -165,9 +166,9 @@ def test_every_module_with_cached_kernels_imports_ebrl_compiled_itself():
     for path in modules.values():
         tree = ast.parse((ROOT / path).read_text())
         imports = [n for n in tree.body if isinstance(n, (ast.Import, ast.ImportFrom))]
-        if not any((isinstance(n, ast.ImportFrom) and n.module == "ebrl"
-                    and any(a.name == "compiled" for a in n.names))
-                   or (isinstance(n, ast.Import) and any(a.name == "ebrl.compiled" for a in n.names))
+        if not any((isinstance(n, ast.ImportFrom) and n.module == "compiled"
+                    and any(a.name == "cache" for a in n.names))
+                   or (isinstance(n, ast.Import) and any(a.name == "compiled.cache" for a in n.names))
                    for n in imports):
             missing.add(path)
     assert missing == NOT_YET
@@ -175,14 +176,14 @@ def test_every_module_with_cached_kernels_imports_ebrl_compiled_itself():
 
 def test_each_module_imported_first_has_its_cached_kernels_keyed_on_their_dependencies():
     """In a fresh process per module, imported before any other of the checkout's: every
-    cached kernel it defines has ebrl.compiled's locator. (The processes are forked from
+    cached kernel it defines has compiled.cache's locator. (The processes are forked from
     one that imported only the libraries, numba, MuJoCo and dm_control: each module is
     still the first of the checkout's in its process.)"""
     from helpers import ROOT
     code = textwrap.dedent("""\
         import importlib, os, sys
         import dm_control.mjcf, dm_control.rl.control, mujoco, numba, numpy  # noqa: F401
-        assert not any(m.split(".")[0] in ("ebrl", "tasks", "experiments", "models")
+        assert not any(m.split(".")[0] in ("compiled", "ebrl", "tasks", "experiments", "models")
                        for m in sys.modules)
         for name in sys.argv[1:]:
             read, write = os.pipe()
@@ -190,12 +191,12 @@ def test_each_module_imported_first_has_its_cached_kernels_keyed_on_their_depend
                 try:
                     os.close(read)
                     module = importlib.import_module(name)
-                    from ebrl import compiled
+                    from compiled import cache
                     cached = [v for v in vars(module).values() if hasattr(v, "py_func")
                               and v.__module__ == module.__name__
                               and v.stats.cache_path is not None]
                     os.write(write, f"{name} {len(cached)} "
-                                    f"{sum(map(compiled.covers, cached))}".encode())
+                                    f"{sum(map(cache.covers, cached))}".encode())
                     os._exit(0)
                 finally:
                     os._exit(1)

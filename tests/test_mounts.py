@@ -359,8 +359,8 @@ def test_an_installed_copy_finds_the_shipped_mounts_and_behaviours_by_name(tmp_p
     packages = sorted(".".join(p.parent.relative_to(source).parts)
                       for p in source.glob("**/__init__.py")
                       if p.parent.relative_to(source).parts[0] in
-                      ("ebrl", "tasks", "models", "behaviours", "experiments"))
-    assert "tasks.realisations" in packages and "ebrl.baselines" in packages
+                      ("compiled", "ebrl", "tasks", "models", "behaviours", "experiments"))
+    assert {"tasks.realisations", "ebrl.baselines", "compiled"} <= set(packages)
     code = ("import importlib, sys\n"
             # the checkout's editable install: its finder would serve what the copy lacks
             "sys.meta_path[:] = [f for f in sys.meta_path if 'editable' not in repr(f)]\n"

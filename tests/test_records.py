@@ -1,9 +1,9 @@
-"""ebrl.records: a record defined once, built by name, read by name in compiled code."""
+"""compiled.records: a record defined once, built by name, read by name in compiled code."""
 import numpy as np
 import pytest
 from numba import njit
 
-from ebrl import records
+from compiled import records
 from ebrl.steps import AGENT_FIELDS, AgentRecord
 from tasks.kernels.thrusters import ThrustersRecord
 from tasks.kernels.stream import Stream, stream_state

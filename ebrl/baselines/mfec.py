@@ -5,7 +5,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl.baselines.common import _Base, action_count
 from ebrl.baselines.configs import MFECConfig
 

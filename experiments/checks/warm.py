@@ -6,7 +6,7 @@ and what was not adopted"), and the test processes that start together (two pyte
 workers, the `ebrl` commands and pool workers they start) would each compile the same
 kernels before the first of them has written its cache entry. Here one short run of each robot, condition
 and learner, in both loops (the compiled stretches and dm_control's step by step), compiles
-each kernel once, on two processes; every later process loads them (ebrl/compiled.py).
+each kernel once, on two processes; every later process loads them (compiled/cache.py).
 The runs go to the processes one realisation at a time (tasks.realisations): the robots of
 a realisation share its kernels, so a process that has compiled them runs the others in
 no time, where two processes given one realisation's robots at once would both compile

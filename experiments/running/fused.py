@@ -25,10 +25,10 @@ from numba import njit
 
 import ebrl
 import tasks
-from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from ebrl import kernels as agent_kernels
 from ebrl import steps as agent_steps
-from ebrl import records
+from compiled import records
 from ebrl.agent import act_step, invalid_observation, trial_end
 from tasks import navigation
 from tasks.kernels import bindings, body

@@ -14,7 +14,7 @@ The mirror of ebrl/kernels.py for the simulator side, one module per job:
 | `thrusters` | the floating drive's realisation and step |
 | `env_step` | the dispatch table (`DISPATCH`); the entry points `step` (an agent step), `observe` |
 
-Each realisation's record is an ebrl.records.Record of named fields (`<Name>Record` in
+Each realisation's record is a compiled.records.Record of named fields (`<Name>Record` in
 the module of its name: tasks.realisations); tasks.navigation.Physics builds it. The
 dm_env hooks (tasks.navigation.Navigation) run the same `env_step.step`, so each
 realisation's logic exists once. Every kernel is ``@njit(cache=True)`` with no fastmath:

@@ -27,7 +27,7 @@ import numpy as np
 from llvmlite import binding
 from numba import njit, types
 
-from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from tasks.simulator import mujoco
 
 _LIBRARY = sorted(glob.glob(os.path.join(os.path.dirname(mujoco.__file__), "libmujoco.so*")))

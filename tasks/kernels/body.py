@@ -1,6 +1,6 @@
 """What every drive's record holds, and the kernels every drive shares.
 
-A realisation's record (an ebrl.records.Record: tasks.kernels.servos.ServosRecord,
+A realisation's record (a compiled.records.Record: tasks.kernels.servos.ServosRecord,
 tasks.kernels.thrusters.ThrustersRecord, ...) starts with BODY_FIELDS, the robot's body in
 MuJoCo and the task's sensing, goal and action noise; its own fields follow. The kernels
 here work on any such record (numba compiles one version per record type): the substeps
@@ -12,8 +12,8 @@ import math
 
 from numba import njit
 
-from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
-from ebrl import kernels as agent_kernels
+from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from compiled.clip import clip_unit
 from tasks.kernels import bindings, sensing
 
 #: The body's fields, as every drive's record starts.
@@ -74,13 +74,13 @@ def sense(s, noise):
 
 @njit(cache=True)
 def clip_finite(a):
-    """A finite action's parts clipped to [-1, 1] in place (ebrl.kernels.clip_unit, the one
+    """A finite action's parts clipped to [-1, 1] in place (compiled.clip.clip_unit, the one
     clip: as Python's min(max(v, -1), 1) for any finite v), returning True; NaN and inf are
     refused (returns False, nothing clipped)."""
     for i in range(a.shape[0]):
         if not math.isfinite(a[i]):
             return False
-    agent_kernels.clip_unit(a)
+    clip_unit(a)
     return True
 
 

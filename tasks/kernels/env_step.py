@@ -19,12 +19,12 @@ arguments; the thrusters' is the floating drive's step. `action` and `velocity` 
 resolved from the table by the record's type when numba compiles an entry point for it:
 the one place a record's type picks its code. This module imports every realisation's
 kernels, so numba's cache of these entry points follows an edit of any of them
-(ebrl.compiled).
+(compiled.cache).
 """
 from numba import njit
 from numba.extending import overload
 
-from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from tasks.kernels import bindings, body, gait, joint_motors, plan, sensing, servos, thrusters, \
     two_wheel, wheel_motors, wheels
 

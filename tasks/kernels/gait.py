@@ -13,8 +13,8 @@ import numpy as np
 
 from numba import njit
 
-from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
-from ebrl import records
+from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from compiled import records
 from tasks.kernels import bindings
 from tasks.kernels.body import BODY_FIELDS, base_pose, step_phase
 from tasks.kernels import two_wheel as family

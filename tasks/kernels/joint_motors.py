@@ -8,8 +8,8 @@ the actuators' kind: torque motors, position servos or velocity servos): a turn 
 joint's by distance * joint_per_unit (unit / radius for a wheel, unit for a slide)."""
 from numba import njit
 
-from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
-from ebrl import records
+from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from compiled import records
 from tasks.kernels import two_wheel as family
 from tasks.kernels.body import BODY_FIELDS, base_pose
 from tasks.kernels.plan import PLAN_FIELDS, aim, phase

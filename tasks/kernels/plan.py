@@ -24,7 +24,7 @@ Each control is clipped to its actuator's range.
 import numpy as np
 from numba import njit
 
-from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from tasks.actuators import ACTUATOR_KINDS
 from tasks.kernels import bindings, two_wheel as family
 

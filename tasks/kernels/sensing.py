@@ -6,7 +6,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from tasks.kernels.bindings import OBJ_BODY, SENSOR_BIT, mj_objectVelocity, mj_sensorPos
 
 

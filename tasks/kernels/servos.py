@@ -7,8 +7,8 @@ the body first touches the room (Section 3.3): a substep that would reach a wall
 just that far (tasks.kernels.two_wheel.room_ahead), and the move stops there."""
 from numba import njit
 
-from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
-from ebrl import records
+from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from compiled import records
 from tasks.kernels import bindings, two_wheel as family
 from tasks.kernels.body import BODY_FIELDS, base_pose, step_phase
 

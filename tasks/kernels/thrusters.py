@@ -10,8 +10,8 @@ The velocity reading follows the range codes (`velocity_reading`).
 import numpy as np
 from numba import njit
 
-from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
-from ebrl import records
+from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from compiled import records
 from tasks.kernels import bindings
 from tasks.kernels.body import BODY_FIELDS, factors, step_phase
 from tasks.readings import codes

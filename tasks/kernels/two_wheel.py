@@ -18,14 +18,14 @@ realisation's own (servos, wheels, wheel_motors, joint_motors, gait).
 
 Not cached on disk itself (plain ``@njit``): it compiles in its realisation's phases, so
 it is cached inside the entry points of tasks.kernels.env_step, whose module reaches every
-realisation (ebrl.compiled).
+realisation (compiled.cache).
 """
 import math
 
 import numpy as np
 from numba import njit
 
-from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from tasks.kernels import bindings, sensing
 from tasks.kernels.body import base_pose, factors
 from tasks.readings import codes

@@ -8,8 +8,8 @@ TORQUE controller: the PD torques tau = kp (target - q) - kv dq and the motors'
 controls that give them."""
 from numba import njit
 
-from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
-from ebrl import records
+from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from compiled import records
 from tasks.kernels import two_wheel as family
 from tasks.kernels.body import BODY_FIELDS, base_pose
 from tasks.kernels.plan import PLAN_FIELDS, aim, phase

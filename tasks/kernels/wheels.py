@@ -7,8 +7,8 @@ substeps, then zero speeds for the rest, the servos settling on their targets; t
 puts the targets where the wheels are, so a stalled wheel gives up the rest."""
 from numba import njit
 
-from ebrl import compiled  # noqa: F401  numba's cache keyed on every file a kernel compiles in
-from ebrl import records
+from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from compiled import records
 from tasks.kernels import bindings, two_wheel as family
 from tasks.kernels.body import BODY_FIELDS, base_pose
 

@@ -20,9 +20,9 @@ process: TemporaryLocator). A cache entry that cannot be read
 the file and the kernel compiled again (MendingCacheFile). It changes no compiled code.
 
 The rule: every module that defines a cached kernel imports this module in its own
-import block, ``from ebrl import compiled  # noqa: F401  numba's cache keyed on ...``,
+import block, ``from compiled import cache  # noqa: F401  numba's cache keyed on ...``,
 so the locators are in place before its first decoration whatever was imported before
-it, and the imports sort as any others. (`compiled` is then in the module's globals: an
+it, and the imports sort as any others. (`cache` is then in the module's globals: an
 edit of this file recompiles the kernels, as it should.)
 tests/test_compiled.py checks the rule over the checkout and, in a fresh process per
 module, that each module's cached kernels are keyed here (covers()).
