@@ -42,27 +42,28 @@ eq 9-10   avoidance by accelerating   intrinsic.eq9, intrinsic.eq10, via
           point of two families       JSON; `ebrl run --behaviour`, `ebrl evolve`)
                                       tests/test_evolve.py
 
-kernels.act and kernels.learn chain these for one step; ebrl.Agent holds the memory as one
-record (steps.AgentRecord) and calls them through steps.act_memory and steps.learn_step,
-once each per step (steps.end_trial at a trial's end).
+kernels.act chains eq 1-5 for one act and steps.learn_step stores the step and applies eq
+6-7 and the time discount; ebrl.Agent holds the memory as one record (steps.AgentRecord)
+and calls steps.act_memory and steps.learn_step once each per step (steps.end_trial at a
+trial's end).
 
 Readings with a credible alternative are switches: Config fields whose values are
 listed in config.READINGS, the first Config's default (a protocol's readings may choose
 another: tasks.protocols, docs/interpretation.md); tests in tests/test_ebrl_readings.py.
 
-episode              trial / continuing        steps.end_trial via Agent.end_episode
+episode              trial / continuing        steps.end_trial via Agent.end_trial
                                                (keeps or cuts the link)
                      test_episode_continuing_keeps_the_link_across_a_trial_end,
                      test_episode_continuing_lets_eq7_cross_a_trial_end
-recall_at_trial_end  empty / keep              steps.end_trial via Agent.end_episode
+recall_at_trial_end  empty / keep              steps.end_trial via Agent.end_trial
                      test_recall_table_kept_or_emptied_at_a_trial_end
 eq7_scope (eq 7)     to_start / decided_only   kernels.eq7, kernels.eq7_decided via
-                                               kernels.learn; steps.act_memory sets
+                                               steps.learn_step; steps.act_memory sets
                                                the flags
                      test_eq7_scope_to_start_or_decided_only,
                      test_eq7_decided_only_counts_an_element_once_and_forgets_its_flag
 forgetting (2.1)     least_reliable / oldest   kernels.least_reliable, kernels.oldest
-                                               via kernels.learn
+                                               via steps.learn_step
                      test_forgetting_least_reliable_or_oldest,
                      test_oldest_kernel_takes_the_smallest_time_stamp
 eq9_dead_zone        keep / zero               intrinsic.Intrinsic (hold) and
@@ -71,7 +72,7 @@ eq9_dead_zone        keep / zero               intrinsic.Intrinsic (hold) and
                      test_eq9_keep_is_reset_by_the_agent_at_a_trial_end_and_ignored_by_eq8
 random_in_avoidance  replace / add             intrinsic.Intrinsic
   (3.4)              test_random_in_avoidance_add_is_avoidance_plus_random_clipped
-initial_reliability  a number in [0, 1]        kernels.learn
+initial_reliability  a number in [0, 1]        steps.learn_step
                      test_initial_reliability_sets_the_forgetting_order
 eq7_signal (eq 7)    reward / surprise_measure steps.act_memory (steps.expected_reward),
                      / surprise_rate           steps.eq7_signal via steps.learn_step

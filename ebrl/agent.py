@@ -16,28 +16,29 @@ similar to s_t (eq 2-4), and acts as the best entry's element did (eq 5) unless 
 entry exceeds the threshold or the agent explores. learn(r) stores (s_t, a_t) as the
 next element of the current episode, forgetting the least reliable element when the
 memory is full, then applies eq 6 and eq 7 when r != 0 and decays every reliability.
-learn(r, last=True) ends the trial (end_episode).
+learn(r, last=True) ends the trial (end_trial).
 
 The readings that Config makes switches (ebrl.config.READINGS) act here as follows:
-episode and recall_at_trial_end at a trial's end (end_episode, through
-steps.end_trial), eq7_scope and forgetting in kernels.learn (through steps.learn_step);
+episode and recall_at_trial_end at a trial's end (end_trial, through
+steps.end_trial), eq7_scope and forgetting in steps.learn_step;
 eq7_scope "decided_only" also flags, in steps.act_memory, each element used for a
 memory decision. eq9_dead_zone and random_in_avoidance belong to the fallback
 (ebrl.intrinsic.fallback_for builds it from them); the agent only calls the fallback's
 reset(), if it has one, when a trial ends.
 
 The work of each step is done by the compiled per-step kernels of ebrl.steps
-(act_memory, learn_step, end_trial; act_step and trial_end below add a compiled
+(act_memory, learn_step, end_trial; act_step and end_trial below add a compiled
 fallback) on the agent's record (steps.AgentRecord), which holds the arrays of this
-class's memory; they call ebrl.kernels.act and ebrl.kernels.learn, which chain the
-equations. The agent's random stream is one exploration draw per act, then the
-fallback's draws when the fallback acts (or the random action's, for exploration
-"random").
+class's memory; act_memory calls ebrl.kernels.act, which chains eq 1-5, and learn_step
+the kernels of eq 6, eq 7, forgetting and the time discount. The agent's random stream
+is one exploration draw per act, then the fallback's draws when the fallback acts (or
+the random action's, for exploration "random").
 """
 from __future__ import annotations
 
 import math
 import types
+import warnings
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -49,7 +50,7 @@ from ebrl.config import Config, reading_code
 from ebrl.kernels import DECIDERS, EXPLORATION, FALLBACK, INVALID, eq1, eq5
 from ebrl.similarity import modalities
 
-__all__ = ["Agent", "DECIDERS", "act_step", "trial_end", "eq1", "eq5"]
+__all__ = ["Agent", "DECIDERS", "act_step", "end_trial", "eq1", "eq5"]
 
 
 @njit(cache=True)
@@ -70,7 +71,7 @@ def act_step(s, f, x, ranges):
 
 
 @njit(cache=True)
-def trial_end(s, f):
+def end_trial(s, f):
     """A trial's end for an agent with a compiled fallback: steps.end_trial on the
     agent's record s, then the fallback's reset (record f)."""
     steps.end_trial(s)
@@ -140,7 +141,7 @@ class Agent:
             fallback.bind(self.rng)
             self.fallback_record = fallback.record
         #: True when the fallback is compiled (ebrl.intrinsic's RandomWalk or Intrinsic with
-        #: the paper's avoidance): a whole step is then compiled code (act_step, trial_end).
+        #: the paper's avoidance): a whole step is then compiled code (act_step, end_trial).
         self.compiled = (type(fallback) in (intrinsic.RandomWalk, intrinsic.Intrinsic)
                           and fallback.compiled)
         self._action = self.memory.action
@@ -231,9 +232,9 @@ class Agent:
         if not steps.learn_step(self.record, reward):
             raise ValueError("learn() needs an act() first")
         if last:
-            self.end_episode()
+            self.end_trial()
 
-    def end_episode(self) -> None:
+    def end_trial(self) -> None:
         """A trial ends (learn(..., last=True) calls this).
 
         episode "trial": the episode ends with it, so the next element has no backward
@@ -245,9 +246,16 @@ class Agent:
         by its last reward (steps.end_trial). The fallback's reset(), if any, is
         called."""
         if self.compiled:
-            trial_end(self.record, self.fallback_record)
+            end_trial(self.record, self.fallback_record)
             return
         steps.end_trial(self.record)
         reset = getattr(self.fallback, "reset", None)
         if reset is not None:
             reset()
+
+    def end_episode(self) -> None:
+        """Deprecated: end_trial, the one name of a trial's end (Section 3.6's trials;
+        an episode is a sequence of memory elements, Section 2.1)."""
+        warnings.warn("Agent.end_episode is deprecated: use Agent.end_trial", DeprecationWarning,
+                      stacklevel=2)
+        self.end_trial()

@@ -26,7 +26,7 @@ The readings that are switches reach the kernels as ints, their codes
 (ebrl.readings.Reading.code: the value's index in the registry), and the constants here
 are named by those codes (ebrl.readings.codes): learn's eq7_scope (EQ7_TO_START,
 EQ7_DECIDED_ONLY) and forgetting (FORGET_LEAST_RELIABLE, FORGET_OLDEST). The episode
-and recall-table switches act at a trial's end, in ebrl.Agent.end_episode.
+and recall-table switches act at a trial's end, in ebrl.Agent.end_trial.
 """
 import numpy as np
 from numba import njit
@@ -301,55 +301,3 @@ def time_discount(rel, size, rate):
     """2.1: every stored element's reliability times the time discount rate."""
     for m in range(size):
         rel[m] *= rate
-
-
-@njit(cache=True)
-def learn(x, action, reward, step, size, tail, referred, inputs, sums, variance, actions,
-          utility, rel, time, nxt, prev, table, table_w, floor, initial_utility,
-          initial_reliability, discount, cutoff, rho, decay, decided, eq7_scope, forgetting,
-          r7, walk, cut):
-    """One learn: stores (x, action) as the episode's next element, in a free slot or,
-    when the memory is full, in a forgotten element's; then eq 6 if reward != 0, eq 7
-    if its r, r7 (eq7_signal's: the reward itself by default), != 0, then the time
-    discount. Returns (size, tail, referred).
-
-    forgetting (2.1): FORGET_LEAST_RELIABLE forgets the least reliable element,
-    FORGET_OLDEST the oldest; cut: the episode is cut at it (forget). eq7_scope:
-    EQ7_TO_START applies eq 7 from `referred` back to its episode's start (when
-    referred >= 0) with its walk (eq7), EQ7_DECIDED_ONLY to the elements flagged in
-    `decided`. A reused slot's decided flag is cleared.
-    """
-    if size == rel.shape[0]:
-        if forgetting == FORGET_OLDEST:
-            slot = oldest(time, size)
-        else:
-            slot = least_reliable(rel, size)
-        tail, referred = forget(slot, inputs, sums, nxt, prev, table, table_w, tail, referred,
-                                cut)
-        decided[slot] = False
-    else:
-        slot = size
-        size += 1
-    for i in range(x.shape[0]):
-        inputs[i, slot] = x[i]
-        sums[0, i] += x[i]
-        sums[1, i] += x[i] * x[i]
-    update_variance(sums, size, floor, variance)
-    actions[slot] = action
-    utility[slot] = initial_utility
-    rel[slot] = initial_reliability
-    time[slot] = step
-    nxt[slot] = -1
-    prev[slot] = tail
-    if tail >= 0:
-        nxt[tail] = slot
-    tail = slot
-    if reward != 0.0:
-        eq6(utility, prev, time, slot, reward, discount, cutoff)
-    if r7 != 0.0:
-        if eq7_scope == EQ7_DECIDED_ONLY:
-            eq7_decided(rel, decided, size, r7, rho)
-        elif referred >= 0:
-            eq7(rel, prev, referred, r7, rho, time, discount, cutoff, walk)
-    time_discount(rel, size, decay)
-    return size, tail, referred

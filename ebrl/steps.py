@@ -9,8 +9,9 @@ from numba import njit
 from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from compiled import records
 from compiled.clip import clip_unit
-from ebrl.kernels import EQ7_REWARD, EQ7_SURPRISE_RATE, EXPLORATION, EXPLORED, FALLBACK, \
-    INVALID, MEMORY, NO_EXCLUSION, act, eq5, learn
+from ebrl.kernels import EQ7_DECIDED_ONLY, EQ7_REWARD, EQ7_SURPRISE_RATE, EXPLORATION, \
+    EXPLORED, FALLBACK, FORGET_OLDEST, INVALID, MEMORY, NO_EXCLUSION, act, eq5, eq6, eq7, \
+    eq7_decided, forget, least_reliable, oldest, time_discount, update_variance
 
 
 #: The record's fields, in the constructor's order.
@@ -132,16 +133,55 @@ def act_memory(s, x):
 
 @njit(cache=True)
 def learn_step(s, reward):
-    """One learn on record s: stores the last act's (input, action) and learns from
-    reward (`learn`); False, with nothing changed, when no act is pending."""
+    """One learn on record s: stores the last act's (input, action) as the episode's next
+    element, in a free slot or, when the memory is full, in a forgotten element's; then
+    eq 6 if reward != 0, eq 7 if its r (eq7_signal's: the reward itself by default) != 0,
+    then the time discount. False, with nothing changed, when no act is pending.
+
+    forgetting (2.1): FORGET_LEAST_RELIABLE forgets the least reliable element,
+    FORGET_OLDEST the oldest; cut_links: the episode is cut at it (forget). eq7_scope:
+    EQ7_TO_START applies eq 7 from `referred` back to its episode's start (when
+    referred >= 0) with its walk (eq7), EQ7_DECIDED_ONLY to the elements flagged in
+    `decided`. A reused slot's decided flag is cleared."""
     if not s.pending:
         return False
-    s.size, s.tail, s.referred = learn(
-        s.obs, s.action, reward, s.steps, s.size, s.tail, s.referred, s.inputs, s.sums,
-        s.variance, s.actions, s.utility, s.rel, s.time, s.nxt, s.prev, s.table, s.table_w,
-        s.floor, s.initial_utility, s.initial_reliability, s.discount, s.cutoff, s.rho,
-        s.decay, s.decided, s.eq7_scope, s.forgetting, eq7_signal(s, reward), s.eq7_walk,
-        s.cut_links)
+    r7 = eq7_signal(s, reward)
+    size, tail, referred, rel = s.size, s.tail, s.referred, s.rel
+    if size == rel.shape[0]:
+        if s.forgetting == FORGET_OLDEST:
+            slot = oldest(s.time, size)
+        else:
+            slot = least_reliable(rel, size)
+        tail, referred = forget(slot, s.inputs, s.sums, s.nxt, s.prev, s.table, s.table_w,
+                                tail, referred, s.cut_links)
+        s.decided[slot] = False
+    else:
+        slot = size
+        size += 1
+    x, sums = s.obs, s.sums
+    for i in range(x.shape[0]):
+        s.inputs[i, slot] = x[i]
+        sums[0, i] += x[i]
+        sums[1, i] += x[i] * x[i]
+    update_variance(sums, size, s.floor, s.variance)
+    s.actions[slot] = s.action
+    s.utility[slot] = s.initial_utility
+    rel[slot] = s.initial_reliability
+    s.time[slot] = s.steps
+    s.nxt[slot] = -1
+    s.prev[slot] = tail
+    if tail >= 0:
+        s.nxt[tail] = slot
+    tail = slot
+    if reward != 0.0:
+        eq6(s.utility, s.prev, s.time, slot, reward, s.discount, s.cutoff)
+    if r7 != 0.0:
+        if s.eq7_scope == EQ7_DECIDED_ONLY:
+            eq7_decided(rel, s.decided, size, r7, s.rho)
+        elif referred >= 0:
+            eq7(rel, s.prev, referred, r7, s.rho, s.time, s.discount, s.cutoff, s.eq7_walk)
+    time_discount(rel, size, s.decay)
+    s.size, s.tail, s.referred = size, tail, referred
     s.steps += 1
     s.pending = False
     return True
@@ -149,7 +189,7 @@ def learn_step(s, reward):
 
 @njit(cache=True)
 def end_trial(s):
-    """A trial ends (ebrl.Agent.end_episode has the readings' meaning): the episode's
+    """A trial ends (ebrl.Agent.end_trial has the readings' meaning): the episode's
     link is cut unless continuing, eq 7's starting point and its decided flags reset,
     the recall table emptied unless kept; the next trial's first step noted
     (recall_candidates "past")."""

@@ -114,6 +114,25 @@ def test_same_seed_same_state_bit_for_bit():
     assert ag1.memory_decisions == ag2.memory_decisions > 0
 
 
+
+def test_a_trial_ends_by_one_name_and_the_old_one_warns():
+    """end_trial is a trial's end (learn(r, last=True) calls it); end_episode, its old
+    name, warns and does the same: the next act recalls from the candidates only."""
+    ag = ebrl.Agent(ebrl.Config(memory_size=16, recall_size=3), 2, 1,
+                    intrinsic.fallback_for("eq8", "avoidance"), seed=0)
+    for _ in range(4):
+        ag.act(np.array([0.1, 0.2]))
+        ag.learn(0.0)
+    ag.end_trial()
+    assert ag.tail == -1 and ag.referred == -1
+    ag.act(np.array([0.1, 0.2]))
+    ag.learn(0.0)
+    assert ag.tail >= 0
+    with pytest.warns(DeprecationWarning, match="use Agent.end_trial"):
+        ag.end_episode()
+    assert ag.tail == -1
+
+
 @pytest.mark.slow
 def test_kernels_are_compiled_once_and_cached():
     """Every kernel carries cache=True, and a new process loads them from numba's cache

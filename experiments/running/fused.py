@@ -5,7 +5,7 @@ The step-by-step loop runs, per agent step, `ebrl.Agent.act`, `tasks.Environment
 and `ebrl.Agent.learn`: each a little Python around one compiled function
 (`ebrl.agent.act_step`, `tasks.kernels.env_step.step` with the task's draws
 `tasks.kernels.stream.task_draws`, `ebrl.steps.learn_step`, and at a goal
-`ebrl.agent.trial_end`). `run` iterates those same functions inside one numba call, up
+`ebrl.agent.end_trial`). `run` iterates those same functions inside one numba call, up
 to a trial's end, on the same named records: the agent's (`Agent.record`, its numpy
 Generator inside, drawn in place), its fallback's (`Agent.fallback_record`), the drive's
 (`Physics.record`, the drive's record: tasks.kernels) and the task's random stream
@@ -29,7 +29,7 @@ from compiled import cache  # noqa: F401  numba's cache keyed on every file a ke
 from ebrl import kernels as agent_kernels
 from ebrl import steps as agent_steps
 from compiled import records
-from ebrl.agent import act_step, invalid_observation, trial_end
+from ebrl.agent import act_step, end_trial, invalid_observation
 from tasks import navigation
 from tasks.kernels import bindings, body
 from tasks.kernels import env_step
@@ -114,7 +114,7 @@ def run(steps, agent, fallback, drive, stream, io, trace, first):
         trace[first + k, 0] = x
         trace[first + k, 1] = y
         if goal:
-            trial_end(agent, fallback)
+            end_trial(agent, fallback)
             return k + 1, GOAL
     return steps, BUDGET
 
