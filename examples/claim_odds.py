@@ -6,7 +6,7 @@ hold on one set of 50 seeds and fail on the next. This pools the runs of the fol
 draws `--draws` sets of `--seeds` seeds **with replacement** from the seeds every group has
 (a bootstrap: each draw is a sample the size of one experiment from the runs we have, the
 same seeds for every robot and condition), computes each draw's summary and claims exactly
-as `ebrl report` does (`results.summarize`, `report.claims`), and prints the share of draws
+as `ebrl report` does (`aggregate.summarize`, `report.claims`), and prints the share of draws
 on which each of the ten claims holds. The learning claims (a shrink) are judged two ways:
 by the one-sided z test of the log shrink below 0 (as `ebrl report` does,
 `verdicts.claim_tests`) and by the point estimate below 100%; C5 and C6 also by the count
@@ -46,7 +46,7 @@ import numpy as np
 from experiments import paper
 from experiments.outputs import report
 from experiments.outputs.verdicts import ALPHA, count_tests
-from experiments.running import results
+from experiments.running import aggregate, results
 from tasks.robots import DRIVES, PAPER_ROBOTS, ROBOTS
 
 
@@ -99,7 +99,7 @@ def odds(runs, n_seeds, draws, seed=0):
     rng = np.random.default_rng(seed)
     held = {}
     for _ in range(draws):
-        for claim, ok in verdicts(results.summarize(draw(runs, common, n_seeds, rng))).items():
+        for claim, ok in verdicts(aggregate.summarize(draw(runs, common, n_seeds, rng))).items():
             held.setdefault(claim, []).append(ok)
     return {c: float(np.mean(v)) for c, v in held.items()}, len(common)
 
@@ -169,7 +169,7 @@ def paper_odds(n_seeds, draws, seed=0):
     rng = np.random.default_rng(seed)
     held = {}
     for _ in range(draws):
-        summary = results.summarize(paper_runs(n_seeds, rng, later))
+        summary = aggregate.summarize(paper_runs(n_seeds, rng, later))
         for claim, ok in verdicts(summary, model=True).items():
             held.setdefault(claim, []).append(ok)
     return {c: float(np.mean(v)) for c, v in held.items()}

@@ -64,7 +64,7 @@ def test_claim_odds_draws_seeds_with_replacement_and_judges_each_draw_as_the_rep
     report's own claims; more seeds than every group has is one line and exit status 1;
     C6 has no model-based odds, only m / (m + n)."""
     from experiments.outputs import report
-    from experiments.running import results
+    from experiments.running import aggregate, results
     out = tmp_path / "results"  # long enough for a goal in both conditions on both seeds
     here("run", "--robot", "two_wheel", "--seeds", "0-1", "--steps", "8000", "--no-progress",
          "--workers", "1", "--out", out)
@@ -79,10 +79,10 @@ def test_claim_odds_draws_seeds_with_replacement_and_judges_each_draw_as_the_rep
         for i in range(2):
             assert d[("two_wheel", "avoidance", i)]["parameters"]["seed"] == \
                 d[("two_wheel", "random", i)]["parameters"]["seed"]
-        want = {c: bool(ok) for c, _, ok in report.claims(results.summarize(d))}
-        got = odds.verdicts(results.summarize(d))
+        want = {c: bool(ok) for c, _, ok in report.claims(aggregate.summarize(d))}
+        got = odds.verdicts(aggregate.summarize(d))
         assert {c: got[c] for c in want} == want
-    model = odds.verdicts(results.summarize(draws[0]), model=True)
+    model = odds.verdicts(aggregate.summarize(draws[0]), model=True)
     assert not any("every run reaches at least" in c or c.startswith("C6") for c in model)
     assert odds.c6_exchangeable(50) == 0.5 and odds.c6_exchangeable(100) == pytest.approx(1 / 3)
     # m / (m + n) by simulation: 100 continuous draws all above the least of 50 others

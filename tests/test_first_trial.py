@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from experiments.running import execution, results, runner
+from experiments.running import aggregate, execution, results, runner
 
 # Seeds whose first trial ends well inside a short budget (first trials of protocol 7 and 8:
 # the ablation's seeds 300-349 for the avoidance condition; protocol 8's fit seeds 8000-8099
@@ -69,7 +69,7 @@ def test_a_first_trial_run_has_its_own_folder_and_parameters(tmp_path):
     assert run["metrics"]["goals"] == 1 and run["metrics"]["first_trial_steps"] == 673
     trace, starts, ends = results.load_trace(tmp_path, spec.label, "avoidance", 319)
     assert trace.shape == (674, 2) and ends.tolist() == [673]
-    summary = results.summarize(results.load_runs(tmp_path))
+    summary = aggregate.summarize(results.load_runs(tmp_path))
     assert summary["groups"][0]["robot"] == "floating.first_trial"
     assert summary["groups"][0]["first_trial_steps"]["mean"] == 673
 

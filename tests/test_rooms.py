@@ -10,7 +10,7 @@ import pytest
 import models
 import tasks
 from experiments.outputs import optimal, rendering
-from experiments.running import execution, results, runner
+from experiments.running import aggregate, execution, results, runner
 from helpers import ebrl, ebrl_here
 from models import UNIT, rooms
 
@@ -114,7 +114,7 @@ def test_a_room_is_part_of_a_runs_record_and_folder(tmp_path):
     assert {k[0] for k in runs} == {"two_wheel", "two_wheel@u_maze"}
     assert set(results.load_runs(tmp_path, room="u_maze")) == {("two_wheel@u_maze", "avoidance", 0)}
     assert set(results.load_runs(tmp_path, room=None)) == {("two_wheel", "avoidance", 0)}
-    groups = results.summarize(runs)["groups"]
+    groups = aggregate.summarize(runs)["groups"]
     assert {g["robot"]: g.get("room") for g in groups} == {"two_wheel": None,
                                                            "two_wheel@u_maze": "u_maze"}
     # A trace stays inside its own room's field.

@@ -12,7 +12,7 @@ numbers them:
   mean above the avoidance mean rejects (verdicts.cut_p). The interval resamples seeds,
   the same seeds for both conditions (a seed gives both conditions the same streams).
 - C3, C4, C9, C10 (learning shrinks trials): the shrink and its interval
-  (results.summarize); holds when the one-sided z test of its log below 0 rejects
+  (aggregate.summarize); holds when the one-sided z test of its log below 0 rejects
   (verdicts.shrinks_p).
 - C5 (most two-wheel random walks reach fewer than 30 goals in 30,000 steps): the share
   of runs below 30 goals, Wilson's interval; holds when the one-sided binomial test
@@ -44,7 +44,7 @@ import numpy as np
 
 from experiments import paper
 from experiments.outputs import report, verdicts
-from experiments.running import results
+from experiments.running import aggregate
 from experiments.running import execution
 from experiments.studies import design
 from tasks.robots import DRIVES
@@ -118,7 +118,7 @@ def by_definition(claim):
 
 def run_of(record, definition):
     """A record (experiments.studies.multiverse_records) as the run the summary takes
-    (results.summarize: its metrics, its steps, its memory decisions), its steps per
+    (aggregate.summarize: its metrics, its steps, its memory decisions), its steps per
     trial by the definition."""
     trials = record["trials"]
     metrics = execution.metrics(np.cumsum(np.asarray(trials, dtype=np.int64)))
@@ -224,7 +224,7 @@ def universe_record(runs, definition=None):
         return None
     if definition is not None:
         runs = {k: run_of(r, definition) for k, r in runs.items()}
-    summary = results.summarize(runs)
+    summary = aggregate.summarize(runs)
     return {"summary": summary, "figures": figure_values(summary),
             "claims": claim_values(runs, summary),
             "seconds": float(sum(r.get("seconds", 0.0) for r in runs.values()))}

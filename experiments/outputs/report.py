@@ -9,7 +9,7 @@ import numpy as np
 from experiments import paper
 from experiments.outputs import page, verdict_tables, verdicts
 from experiments.outputs import optimal
-from experiments.running import lock, provenance, results
+from experiments.running import aggregate, lock, provenance, results
 from models import rooms
 from tasks.robots import DRIVES
 
@@ -391,7 +391,7 @@ def build(root, room=False):
     runs = results.load_runs(root, room=room, damaged=damaged)
     prov = provenance.of(runs, root)  # refuses to pool different protocols or parameters
     failed = results.failed_runs(root)  # named below, never averaged
-    summary = results.summarize(runs)
+    summary = aggregate.summarize(runs)
     summary["provenance"] = prov
     summary["tests"] = verdicts.tested(summary)
     summary["locks"] = lock.of_runs(root, runs)  # the environments the runs were made in
@@ -401,7 +401,7 @@ def build(root, room=False):
         summary["damaged"] = [{"run": name, "reason": e.reason} for name, e in damaged.items()]
     figures = root / "figures"
     figures.mkdir(exist_ok=True)
-    robots = sorted({k[0] for k in runs}, key=lambda r: (results.robot_order(r), r))
+    robots = sorted({k[0] for k in runs}, key=lambda r: (aggregate.robot_order(r), r))
     for robot in robots:
         cumulative_reward_figure(root, runs, robot, figures / f"cumulative_reward_{robot}.png")
         traces_figure(root, runs, robot, figures / f"traces_{robot}.png")
@@ -467,7 +467,7 @@ def sweep_table(out, param, rows, failed=()):
              "| " + param + " | robot | condition | seeds | first-trial steps | steps per trial (95% CI) "
              "| shrink | goals min / median |", "|---:|---|---|---:|---:|---|---:|---|"]
     for value, runs in rows:
-        s = results.summarize(runs)
+        s = aggregate.summarize(runs)
         for g in s["groups"]:
             p = g["steps_per_trial"]
             lines.append(f"| {value} | {g['robot']} | {g['condition']} | {g['seeds']} "

@@ -15,7 +15,7 @@ import pathlib
 
 from experiments import paper
 from experiments.outputs import report
-from experiments.running import results, runner
+from experiments.running import aggregate, results, runner
 from experiments.running import settings
 from tasks import readings as registry
 from tasks.robots import PAPER_ROBOTS, ROBOTS, resolve
@@ -153,12 +153,12 @@ def summarize(cell_runs):
     """ablation.json's content: every cell's summary and its claims."""
     data = {"cells": {}}
     for name, runs in cell_runs.items():
-        s = results.summarize(runs)
+        s = aggregate.summarize(runs)
         if name != DEFAULT:  # a cell runs only what its readings touch: fill in the rest
             have = {(g["robot"], g["condition"]) for g in s["groups"]}
-            s["groups"] += [g for g in results.summarize(cell_runs[DEFAULT])["groups"]
+            s["groups"] += [g for g in aggregate.summarize(cell_runs[DEFAULT])["groups"]
                             if (g["robot"], g["condition"]) not in have]
-            s["groups"].sort(key=lambda g: (results.robot_order(g["robot"]),
+            s["groups"].sort(key=lambda g: (aggregate.robot_order(g["robot"]),
                                             paper.CONDITIONS.index(g["condition"])))
         claims = [{"claim": c, "ours": o, "holds": bool(h)} for c, o, h in report.claims(s)]
         data["cells"][name] = {"groups": s["groups"], "claims": claims,

@@ -26,7 +26,7 @@ import sys
 from experiments import paper
 from experiments.commands.arguments import seeds as parse_seeds
 from experiments.outputs import verdicts
-from experiments.running import results
+from experiments.running import aggregate
 from experiments.studies import first_trials, grid
 
 #: The radii tried: from a robot with its seven beams to one that half fills a 10-unit
@@ -73,7 +73,7 @@ def passed(runs):
     shrinks with the paper's point inside our 95% bootstrap interval, C5 and C6 (runs
     below 30 goals, paper 43 of 50; below 49, paper 0 of 50) not shown different by
     Fisher's exact test."""
-    summary = results.summarize({("two_wheel", c, s): r for (c, s), r in runs.items()})
+    summary = aggregate.summarize({("two_wheel", c, s): r for (c, s), r in runs.items()})
     out = {}
     for g in summary["groups"]:
         ref = paper.RESULTS[("two_wheel", g["condition"])]

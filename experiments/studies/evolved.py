@@ -12,7 +12,7 @@ commands write:
     EVOLVED/transfer         the planar robots' genomes on the 3D robots, unchanged
 
 Every table is the avoidance condition at the robot's budget, means over the held-out
-seeds with 95% percentile bootstrap intervals (results.summarize). A folder that is
+seeds with 95% percentile bootstrap intervals (aggregate.summarize). A folder that is
 missing leaves its rows out, with a line saying so.
 """
 import functools
@@ -20,7 +20,7 @@ import pathlib
 
 from ebrl import behaviour as genomes
 from experiments.outputs import report
-from experiments.running import results
+from experiments.running import aggregate, results
 from experiments.studies import study
 from experiments.studies import evolve
 from tasks.robots import ROBOTS
@@ -52,7 +52,7 @@ def _folder(folder):
         runs = results.load_runs(folder)
     except results.ResultsError:
         return {}, {}
-    summary = results.summarize(runs)
+    summary = aggregate.summarize(runs)
     return runs, {g["robot"]: g for g in summary["groups"] if g["condition"] == CONDITION}
 
 
@@ -70,8 +70,8 @@ def _goals(folder, robot):
     import numpy as np
     values = [run["metrics"]["goals"] for (r, c, _), run in sorted(_folder(folder)[0].items())
               if (r, c) == (robot, CONDITION)]
-    rng = np.random.default_rng(results.BOOTSTRAP_SEED)
-    return {"mean": float(np.mean(values)), "ci95": results.bootstrap_ci(values, rng)}
+    rng = np.random.default_rng(aggregate.BOOTSTRAP_SEED)
+    return {"mean": float(np.mean(values)), "ci95": aggregate.bootstrap_ci(values, rng)}
 
 
 def _apart(hand, evolved):

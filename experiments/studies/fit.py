@@ -29,7 +29,7 @@ import pathlib
 
 from experiments import paper
 from experiments.outputs import report
-from experiments.running import results, schema
+from experiments.running import aggregate, results, schema
 from experiments.running import runner, settings
 from experiments.studies import study
 from tasks import readings as registry
@@ -138,7 +138,7 @@ class Problem:
         return out
 
     def score(self, params, runs):
-        summary = results.summarize(runs)
+        summary = aggregate.summarize(runs)
         value, terms, claims = objective(summary)
         return value, {"figures": figures(summary), "terms": terms,
                        "claims": [[c, o, bool(h)] for c, o, h in claims]}
@@ -215,7 +215,7 @@ def validate_best(problem, trial_params, out, seeds, workers=None, backend="loca
         runs = {}
         for s in specs:
             runs.update(results.load_runs(where(s), [s]))
-        summary = results.summarize(runs)
+        summary = aggregate.summarize(runs)
         value, terms, claims = objective(summary)
         rows[name] = {"value": value, "groups": summary["groups"],
                       "claims": [[c, o, bool(h)] for c, o, h in claims]}
