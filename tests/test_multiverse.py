@@ -364,3 +364,25 @@ def test_the_analysis_with_two_factor_effects_is_written_as_json():
     assert back["c1"]["effects"]["pairs"]["a x b"] == pytest.approx(1.0)
     assert back["c1"]["effects"]["mains"][0] == pytest.approx(4.0)
     assert back["c2"]["effects"] is None
+
+
+def test_the_cost_section_by_hand():
+    """Two calls of two workers (one stopped), two runs of 10 and 30 s; bench at 50 and 100
+    us a step over 1e6 and 2e6 steps: 250 s of one core, 125 s on two; raw physics and the
+    reference pass, 20 + 10 and 40 + 20 us: 150 s, 75 s on two."""
+    from experiments.outputs import multiverse_report as mr
+    timing = [{"runs_made": 1, "seconds": 100.0, "workers": 2, "interrupted": True},
+              {"runs_made": 1, "seconds": 50.0, "workers": 2}]
+    bench = {"two_wheel": {"fused_loop": 50.0, "raw_physics": 20.0, "reference_pass": 10.0},
+             "floating": {"fused_loop": 100.0, "raw_physics": 40.0, "reference_pass": 20.0}}
+    lines = mr.cost_text(2, [10.0, 30.0], timing, bench, {"two_wheel": 1e6, "floating": 2e6})
+    assert "made by 2 call(s) of `ebrl multiverse` (1 stopped and resumed) in **2.5 min**" \
+        in lines[0]
+    assert "the longest 30 s); the floor on 2 worker(s): 20 s." in lines[1]
+    assert "times the 2 runs' steps: 4.2 min of one core; the floor on 2 worker(s): 2.1 min." \
+        in lines[2]
+    assert "a step: 2.5 min of one core, 1.2 min on 2 worker(s)." in lines[2]
+    # an older bench.json without the parts: the fused loop's line alone
+    old = {r: {"fused_loop": b["fused_loop"]} for r, b in bench.items()}
+    line = mr.cost_text(2, [10.0, 30.0], timing, old, {"two_wheel": 1e6, "floating": 2e6})[2]
+    assert line.endswith("2.1 min.") and "reference pass" not in line

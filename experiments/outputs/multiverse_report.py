@@ -297,9 +297,17 @@ def cost_text(n_runs, seconds, timing, bench, steps_by_robot):
     if bench:
         total = sum(steps_by_robot[r] * bench[r]["fused_loop"] * 1e-6 for r in steps_by_robot)
         per = ", ".join(f"{r} {b['fused_loop']:.0f} us a step" for r, b in bench.items())
-        lines.append(f"- `ebrl bench`'s cost of a step (its fused loop, the runs' own: {per}) "
-                     f"times the {n_runs:,} runs' steps: {_hours(total)} of one core; the "
-                     f"floor on {workers} worker(s): {_hours(total / workers)}.")
+        line = (f"- `ebrl bench`'s cost of a step (its fused loop, the runs' own: {per}) "
+                f"times the {n_runs:,} runs' steps: {_hours(total)} of one core; the floor on "
+                f"{workers} worker(s): {_hours(total / workers)}.")
+        parts = ("raw_physics", "reference_pass")
+        if all(isinstance(bench[r].get(k), (int, float)) for r in steps_by_robot for k in parts):
+            floor = sum(steps_by_robot[r] * sum(bench[r][k] for k in parts) * 1e-6
+                        for r in steps_by_robot)
+            line += (" Raw physics (`mj_step` alone) and the reference pass over the memory "
+                     f"(ebrl.benchmark) a step: {_hours(floor)} of one core, "
+                     f"{_hours(floor / workers)} on {workers} worker(s).")
+        lines.append(line)
         compute = compute or total
     if compute:
         longest = max(seconds, default=0.0)
