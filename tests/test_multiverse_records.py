@@ -162,6 +162,11 @@ def test_a_study_resumes_from_its_records_on_a_fresh_folder(tmp_path):
     store = records.Store(fresh / "records", ident)
     assert len(store.runs) == len(runs) and [s["runs_made"] for s in store.timing()] == \
         [done, len(runs) - done]
+    # a report counts the sessions and commits that made its runs, not others' in the folder
+    first = min(store.sessions.values(), key=lambda s: s["header"]["started"])["keys"]
+    assert [s["runs_made"] for s in store.timing(first)] == [done]
+    assert store.timing(set()) == [] and store.commits(set()) == []
+    assert store.commits(first) == store.commits()
     # a rerun makes nothing and writes no shard
     shards = sorted((fresh / "records").iterdir())
     assert ebrl_here("multiverse", "--universes", "2", *TINY, "--out", fresh).returncode == 0

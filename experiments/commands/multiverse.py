@@ -166,7 +166,8 @@ def _report(args, chosen, design, universes, folder, specs, store, made):
     matched = {key(s) for s in made}
     ctx = mr.Context(factor_list, chosen, design, universes, records, analysis, args.seeds,
                      args.steps, len(specs), [float(r["seconds"]) for r in made.values()],
-                     store.commits(), store.timing(), _bench(out, args.bench), steps_by_robot,
+                     store.commits(matched), store.timing(matched), _bench(out, args.bench),
+                     steps_by_robot,
                      figures, failed, str(folder), sum(k not in matched for k in store.runs))
     results.atomic_write(out / "multiverse.json", results.dumps({
         "design": {"name": design.name(), "generators": list(design.generators),

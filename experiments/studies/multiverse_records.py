@@ -202,7 +202,7 @@ class Store:
 
     def __init__(self, folder, ident):
         self.folder, self.ident = pathlib.Path(folder), ident
-        self.runs, self.files, self.sessions = {}, {}, {}
+        self.runs, self.files, self.sessions, self.file_keys = {}, {}, {}, {}
         where = {}
         for path in shards(self.folder):
             header, body, end = read_shard(path)
@@ -214,7 +214,8 @@ class Store:
             self.files[path] = (header, len(body), end)
             session = self.sessions.setdefault(header.get("session", path.name),
                                                {"header": header, "end": None, "at": 0.0,
-                                                "runs": 0})
+                                                "runs": 0, "keys": set()})
+            self.file_keys[path] = set()
             session["end"] = end or session["end"]
             session["runs"] += len(body)
             for record in body:
@@ -229,6 +230,8 @@ class Store:
                         f"{record['setting']}: keep the one to trust in the folder")
                 self.runs.setdefault(k, record)
                 where.setdefault(k, path)
+                session["keys"].add(k)
+                self.file_keys[path].add(k)
 
     def match(self, specs):
         """{spec: record} of the specs with a record; RecordsError when a record holds
@@ -247,12 +250,14 @@ class Store:
             out[spec] = record
         return out
 
-    def timing(self):
-        """Each session that made runs: {"started", "seconds", "runs_made", "workers",
-        "backend", "interrupted"} (a session whose machine died: the seconds to its last
-        record)."""
+    def timing(self, keys=None):
+        """Each session that made runs (of keys: runs by key(spec), where given): {"started",
+        "seconds", "runs_made", "workers", "backend", "interrupted"} (a session whose
+        machine died: the seconds to its last record)."""
         out = []
         for name, s in sorted(self.sessions.items()):
+            if keys is not None and not s["keys"] & keys:
+                continue
             h, end = s["header"], s["end"]
             out.append({"session": name, "started": h.get("started"),
                         "seconds": end["seconds"] if end else s["at"],
@@ -261,9 +266,11 @@ class Store:
                         "interrupted": bool(end["interrupted"]) if end else True})
         return out
 
-    def commits(self):
+    def commits(self, keys=None):
+        """The commits that made the shards' runs (of keys, where given)."""
         return sorted({h.get("versions", {}).get("git_commit", "unknown")
-                       for h, _, _ in self.files.values()})
+                       for path, (h, _, _) in self.files.items()
+                       if keys is None or self.file_keys[path] & keys})
 
 
 def _alive(header):
