@@ -163,7 +163,9 @@ def test_a_study_resumes_from_its_records_on_a_fresh_folder(tmp_path):
     assert len(store.runs) == len(runs) and [s["runs_made"] for s in store.timing()] == \
         [done, len(runs) - done]
     # a report counts the sessions and commits that made its runs, not others' in the folder
-    first = min(store.sessions.values(), key=lambda s: s["header"]["started"])["keys"]
+    started = min(h["started"] for h, _, _ in store.files.values())
+    first = set().union(*(store.file_keys[p] for p, (h, _, _) in store.files.items()
+                          if h["started"] == started))
     assert [s["runs_made"] for s in store.timing(first)] == [done]
     assert store.timing(set()) == [] and store.commits(set()) == []
     assert store.commits(first) == store.commits()

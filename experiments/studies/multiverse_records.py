@@ -214,7 +214,7 @@ class Store:
             self.files[path] = (header, len(body), end)
             session = self.sessions.setdefault(header.get("session", path.name),
                                                {"header": header, "end": None, "at": 0.0,
-                                                "runs": 0, "keys": set()})
+                                                "runs": 0})
             self.file_keys[path] = set()
             session["end"] = end or session["end"]
             session["runs"] += len(body)
@@ -230,7 +230,6 @@ class Store:
                         f"{record['setting']}: keep the one to trust in the folder")
                 self.runs.setdefault(k, record)
                 where.setdefault(k, path)
-                session["keys"].add(k)
                 self.file_keys[path].add(k)
 
     def match(self, specs):
@@ -254,9 +253,10 @@ class Store:
         """Each session that made runs (of keys: runs by key(spec), where given): {"started",
         "seconds", "runs_made", "workers", "backend", "interrupted"} (a session whose
         machine died: the seconds to its last record)."""
+        used = {h.get("session", path.name) for path, h in self._files_of(keys)}
         out = []
         for name, s in sorted(self.sessions.items()):
-            if keys is not None and not s["keys"] & keys:
+            if name not in used:
                 continue
             h, end = s["header"], s["end"]
             out.append({"session": name, "started": h.get("started"),
@@ -269,8 +269,12 @@ class Store:
     def commits(self, keys=None):
         """The commits that made the shards' runs (of keys, where given)."""
         return sorted({h.get("versions", {}).get("git_commit", "unknown")
-                       for path, (h, _, _) in self.files.items()
-                       if keys is None or self.file_keys[path] & keys})
+                       for _, h in self._files_of(keys)})
+
+    def _files_of(self, keys):
+        """(path, header) of each shard holding runs of keys (every shard: keys None)."""
+        return [(path, h) for path, (h, _, _) in self.files.items()
+                if keys is None or self.file_keys[path] & keys]
 
 
 def _alive(header):
