@@ -146,40 +146,42 @@ def learn_step(s, reward):
     if not s.pending:
         return False
     r7 = eq7_signal(s, reward)
-    size, tail, referred, rel = s.size, s.tail, s.referred, s.rel
+    # the record's fields read once, as kernels take them (arrays hoisted out of the loops)
+    size, tail, referred = s.size, s.tail, s.referred
+    x, inputs, sums, rel, time, nxt, prev = s.obs, s.inputs, s.sums, s.rel, s.time, s.nxt, s.prev
+    utility, decided = s.utility, s.decided
     if size == rel.shape[0]:
         if s.forgetting == FORGET_OLDEST:
-            slot = oldest(s.time, size)
+            slot = oldest(time, size)
         else:
             slot = least_reliable(rel, size)
-        tail, referred = forget(slot, s.inputs, s.sums, s.nxt, s.prev, s.table, s.table_w,
-                                tail, referred, s.cut_links)
-        s.decided[slot] = False
+        tail, referred = forget(slot, inputs, sums, nxt, prev, s.table, s.table_w, tail,
+                                referred, s.cut_links)
+        decided[slot] = False
     else:
         slot = size
         size += 1
-    x, sums = s.obs, s.sums
     for i in range(x.shape[0]):
-        s.inputs[i, slot] = x[i]
+        inputs[i, slot] = x[i]
         sums[0, i] += x[i]
         sums[1, i] += x[i] * x[i]
     update_variance(sums, size, s.floor, s.variance)
     s.actions[slot] = s.action
-    s.utility[slot] = s.initial_utility
+    utility[slot] = s.initial_utility
     rel[slot] = s.initial_reliability
-    s.time[slot] = s.steps
-    s.nxt[slot] = -1
-    s.prev[slot] = tail
+    time[slot] = s.steps
+    nxt[slot] = -1
+    prev[slot] = tail
     if tail >= 0:
-        s.nxt[tail] = slot
+        nxt[tail] = slot
     tail = slot
     if reward != 0.0:
-        eq6(s.utility, s.prev, s.time, slot, reward, s.discount, s.cutoff)
+        eq6(utility, prev, time, slot, reward, s.discount, s.cutoff)
     if r7 != 0.0:
         if s.eq7_scope == EQ7_DECIDED_ONLY:
-            eq7_decided(rel, s.decided, size, r7, s.rho)
+            eq7_decided(rel, decided, size, r7, s.rho)
         elif referred >= 0:
-            eq7(rel, s.prev, referred, r7, s.rho, s.time, s.discount, s.cutoff, s.eq7_walk)
+            eq7(rel, prev, referred, r7, s.rho, time, s.discount, s.cutoff, s.eq7_walk)
     time_discount(rel, size, s.decay)
     s.size, s.tail, s.referred = size, tail, referred
     s.steps += 1
