@@ -38,12 +38,12 @@ def run(specs, workers, done):
                     done(spec, error=worker.WorkerDied.of(spec, exits[0] if exits else None))
 
 
-#: What the pool's server process imports once, before it forks each worker: the worker,
-#: and the simulator, the kernels and the agent a run loads. The worker module is light
-#: (the command line imports it) and does not pull them in, so without them each worker
-#: would import MuJoCo, dm_control and numba again (docs/speed.md, "The test suite's time").
-PRELOAD = ["experiments.running.worker", "experiments.running.fused", "tasks.environment",
-           "tasks.kernels.env_step", "ebrl.agent"]
+#: What the pool's server process imports once, before it forks each worker
+#: (experiments/running/preload.py): the worker, the simulator, the kernels and the agent a
+#: run loads, and numba's CPU target started. The worker module is light (the command line
+#: imports it) and does not pull them in, so without them each worker would import MuJoCo,
+#: dm_control and numba again (docs/speed.md, "The test suite's time").
+PRELOAD = ["experiments.running.preload"]
 
 
 def context():
