@@ -25,7 +25,7 @@ LOCK ?= yes
 PIP := $(BIN)/python -m pip
 ifeq ($(LOCK),yes)
 INSTALL_BASE = $(PIP) install -q -r requirements.lock
-INSTALL_TEST = $(PIP) install -q -r requirements-test.lock
+INSTALL_TEST = $(PIP) install -q --no-compile -r requirements-test.lock
 SELF = $(PIP) install -q --no-deps --no-build-isolation -e .
 else
 INSTALL_BASE = $(PIP) install -q -e .
@@ -35,7 +35,9 @@ endif
 
 # One stamp per set of extras, redone when pyproject.toml or a lock changes. The test
 # lock holds the base lock's every package at its version (make lock), so one install of
-# it stands for both stamps: make test on a fresh clone runs pip once, not twice.
+# it stands for both stamps: make test on a fresh clone runs pip once, not twice. It skips
+# pip's compiling of every installed module to bytecode (more than half of its minute):
+# the test processes write the bytecode of what they import, once (docs/speed.md).
 $(VENV)/.installed: $(BIN)/python pyproject.toml requirements.lock
 	$(INSTALL_BASE)
 	$(SELF)

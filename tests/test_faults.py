@@ -136,7 +136,7 @@ def remount(disk, options):
 
 def test_a_small_filesystem_that_fills_up_then_is_freed(clean, tmp_path, small_disk):
     out = small_disk / "results"
-    proc = ebrl("run", *SET, "--workers", "2", "--out", out, env=env(), check=False)
+    proc = here("run", *SET, "--workers", "2", "--out", out, check=False)
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
@@ -241,7 +241,7 @@ def test_ray_records_a_raised_run_and_a_dead_worker_as_the_local_pool_does(clean
 RAY_LOG = re.compile(r"^\[\d{4}-\d\d-\d\d [\d:,]+ [A-Z] \d+ \d+\] \S+\.(cc|h):\d+: ")
 
 
-def test_a_lost_ray_cluster_is_one_line_and_keeps_the_finished_runs(clean, tmp_path, cluster):
+def test_a_lost_ray_cluster_is_one_line_and_keeps_the_finished_runs(clean, tmp_path):
     out = tmp_path / "results"
     doomed = start_cluster()
     # Runs long enough (about a second each on an idle machine) that the cluster dies with
@@ -269,8 +269,8 @@ def test_a_lost_ray_cluster_is_one_line_and_keeps_the_finished_runs(clean, tmp_p
     done = records(out)
     assert 1 <= len(done) < 8 and all(r["status"] == "complete" for r in done.values())
     assert f"the {len(done)} runs written are on disk" in lines[0]
-    proc = ebrl("run", *longer, "--backend", "ray", "--out", out,
-                env=dict(env(), RAY_ADDRESS=cluster))
+    # The rerun here on the local pool (a rerun on Ray: the test above).
+    proc = here("run", *longer, "--workers", "2", "--out", out)
     assert proc.stdout.strip().startswith(f"{8 - len(done)} runs made, {len(done)} already")
     again = records(out)
     assert len(again) == 8 and all(r["status"] == "complete" for r in again.values())
@@ -445,7 +445,7 @@ def test_a_study_killed_at_random_moments_is_continued_by_the_same_command(tmp_p
         else:
             break
     assert kills >= 1
-    proc = ebrl(*FIT, "--out", out, env=env())  # the same command continues
+    proc = here(*FIT, "--out", out)  # the same command continues
     assert "trials made now" in proc.stdout and proc.stderr.strip() == ""
     got = trials(out)
     states = [t.state for t in got]
