@@ -197,3 +197,26 @@ def test_the_maze_study_runs_its_budget_rule_and_writes_its_table(tmp_path):
     assert all(r["units"] == 2 for r in rows)
     text = path.read_text()
     assert "| two_wheel | 7x4 | 2 |" in text and (tmp_path / "figures" / "mazes.png").stat().st_size > 0
+
+
+@pytest.mark.slow
+def test_a_command_compiles_each_robot_once_in_its_process(tmp_path, monkeypatch):
+    """`ebrl run` in a room compiles each robot's model once in its own process (issue 60,
+    item 6): the room's check, the runs' parameters (the model's digest) and the report's
+    yardstick (the robot's radius) read one tasks.compiled_model; the workers compile
+    their own."""
+    import tasks.environment
+    compiled = []
+    real = tasks.environment.compile_robot
+
+    def counted(entry, *args, **kwargs):
+        compiled.append(entry.name)
+        return real(entry, *args, **kwargs)
+
+    monkeypatch.setattr(tasks.environment, "compile_robot", counted)
+    tasks.compiled_model.cache_clear()
+    proc = ebrl_here("run", "--robot", "paper", "--room", "u_maze", "--seeds", "0", "--steps",
+                     "100", "--workers", "1", "--no-progress", "--out", tmp_path / "out")
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "out" / "REPORT.md").exists()
+    assert sorted(compiled) == ["floating", "two_wheel"]

@@ -44,7 +44,9 @@ def check_robots(args):
 def check_room(robots, room, drive=None, overrides=()):
     """Each robot composed into the room (--room; None: the paper's, nothing to check)
     with the task fields of overrides (--set radius=...): models.rooms.MapError, one
-    line, when a corridor is narrower than a robot."""
+    line, when a corridor is narrower than a robot. Compiled through tasks.compiled_model,
+    once per process and model: the runs' parameters (their model's digest) read the same
+    compile."""
     if room is None:
         return
     import dataclasses
@@ -53,7 +55,7 @@ def check_room(robots, room, drive=None, overrides=()):
     task = {k: v for k, v in overrides if k in fields}
     for robot in robots:
         entry = resolve(robot, drive)
-        tasks.compile_robot(entry, entry.task_config(**task), room)
+        tasks.compiled_model(entry, entry.task_config(**task), room)
 
 
 def check_agent(args, overrides):

@@ -215,9 +215,10 @@ def optimal(robot, drive=None, room=None):
     from tasks import navigation
     entry = tasks.resolve(robot, drive)
     field, obstacles, goal, start = rooms.layout(room)
-    # the robot's radius under its readings, from its model as tasks.load compiles it (no
-    # environment, so a report loads none of the drive's compiled kernels)
-    radius = navigation.robot_radius(tasks.compiled_model(entry, entry.task_config())[0])
+    # the robot's radius under its readings, from its model in the room as tasks.load
+    # compiles it (no environment, so a report loads none of the drive's compiled kernels;
+    # the model the command compiled for its runs' parameters, once per process)
+    radius = navigation.robot_radius(tasks.compiled_model(entry, entry.task_config(), room)[0])
     length, path = shortest_path(start[:2], field, obstacles, goal, radius)
     if entry.drive == "two_wheel":
         steps = lower = two_wheel_steps(path, start[2])
