@@ -2,7 +2,7 @@
 
 A record is a mutable struct that compiled functions take as it is (numba's
 ``structref``): the agent's state (ebrl.steps.AgentRecord), a fallback's
-(ebrl.intrinsic.FallbackRecord), a realisation's (tasks.kernels.env_step.DISPATCH),
+(ebrl.intrinsic.FallbackRecord), a realisation's (tasks.realisations.REALISATIONS),
 the task's random stream (tasks.kernels.stream.Stream), the compiled loop's
 (experiments.running.fused.Sensing). Each is
 declared as

@@ -139,8 +139,8 @@ def load(robot: str | os.PathLike | Robot, *, drive: str | None = None, seed: in
     model = copy.copy(compiled_model(entry, config, room)[0])
     realisation = REALISATIONS[entry.realisation]
     task_cls = realisation.task_class()
-    physics_cls = realisation.physics(**(entry.mount.action.physics_attributes()
-                                         if entry.mount is not None else {}))
+    physics_cls = realisation.physics_class(**(entry.mount.action.physics_attributes()
+                                               if entry.mount is not None else {}))
     try:
         physics = physics_cls.from_model(dm_mujoco.wrapper.MjModel(model))
         placement.check_start(physics, heading=entry.drive == "two_wheel")

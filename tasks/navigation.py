@@ -180,7 +180,7 @@ class Physics(dm_mujoco.Physics):
         self.n_beams = len(adr)
 
     #: The realisation's record class (a compiled.records.Record of BODY_FIELDS and its own:
-    #: tasks.kernels.env_step.DISPATCH).
+    #: its row's record in tasks.realisations.REALISATIONS).
     Record = None
 
     def phase_settings(self, n_turn, n_move):

@@ -17,6 +17,32 @@ def _pair(robot, **fields):
     return compiled, hooks
 
 
+def test_each_realisation_is_one_row_whose_entries_resolve():
+    """tasks.realisations.REALISATIONS reaches every part of a realisation: its Physics
+    (whose record is the row's), its record (whose module holds its kernels: the family's
+    PHASES, or a floating drive's act and velocity), its mount kind (of its name, running
+    on it) and its Task class; tasks.kernels.env_step names no realisation."""
+    import inspect
+
+    from tasks.kernels import env_step, two_wheel
+    from tasks.realisations import REALISATIONS
+    for name, row in REALISATIONS.items():
+        assert row.name == name and row.physics_class().Record is row.record_class()
+        kernels = row.kernels()
+        assert kernels.__name__ == f"tasks.kernels.{name}"
+        if row.drive == "two_wheel":
+            assert len(kernels.PHASES) == 5 and all(hasattr(f, "py_func") for f in kernels.PHASES)
+            assert kernels.PHASES[0] is kernels.turn and kernels.PHASES[1] is kernels.move
+        else:
+            assert hasattr(kernels.act, "py_func") and hasattr(kernels.velocity, "py_func")
+        kind = row.kind_class()
+        assert kind.name == name and row.drive in kind.drives
+        assert issubclass(row.task_class(), tasks.navigation.Navigation)
+    source = inspect.getsource(env_step)
+    assert not [name for name in REALISATIONS if f"{name}." in source or f"{name}_" in source]
+    assert list(inspect.signature(two_wheel.act).parameters) == ["s", "a", "u"]
+
+
 @pytest.mark.parametrize("robot,fields", [
     ("two_wheel", {}),
     ("two_wheel", {"sensor_noise": 0.0, "action_noise": 0.0}),

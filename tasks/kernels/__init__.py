@@ -12,10 +12,11 @@ The mirror of ebrl/kernels.py for the simulator side, one module per job:
 | `servos`, `wheels`, `wheel_motors`, `joint_motors`, `gait` | the family's realisations |
 | `plan` | the target plan and its controller (wheel_motors', joint_motors') |
 | `thrusters` | the floating drive's realisation and step |
-| `env_step` | the dispatch table (`DISPATCH`); the entry points `step` (an agent step), `observe` |
+| `env_step` | the entry points `step` (an agent step) and `observe`; a realisation's kernels by its row |
 
 Each realisation's record is a compiled.records.Record of named fields (`<Name>Record` in
-the module of its name: tasks.realisations); tasks.navigation.Physics builds it. The
+the module of its name, named by its row of tasks.realisations.REALISATIONS);
+tasks.navigation.Physics builds it. The
 dm_env hooks (tasks.navigation.Navigation) run the same `env_step.step`, so each
 realisation's logic exists once. Every kernel is ``@njit(cache=True)`` with no fastmath:
 the same operations in the same order as the Python they replaced, so the same bits

@@ -214,3 +214,9 @@ def move(s, distance):
 def halt(s):
     """One substep at the last controls."""
     return step_phase(s, 1), 1
+
+
+#: The two-wheel family's step on this body (tasks.kernels.two_wheel.act, through
+#: tasks.kernels.env_step.action): the turn, move and halt phases, then how a refused
+#: move's state is kept and given back.
+PHASES = (turn, move, halt, family.save_state, family.restore_state)

@@ -12,7 +12,7 @@ from compiled import cache  # noqa: F401  numba's cache keyed on every file a ke
 from compiled import records
 from tasks.kernels import two_wheel as family
 from tasks.kernels.body import BODY_FIELDS, base_pose
-from tasks.kernels.plan import PLAN_FIELDS, aim, phase
+from tasks.kernels.plan import PLAN_FIELDS, aim, back, halt, keep, phase
 from tasks.kernels.wheels import RAMP_FIELDS
 
 
@@ -44,3 +44,9 @@ def move(s, distance):
     aim(s, distance * s.joint_per_unit, 0.0, s.ramp_move)
     heading = base_pose(s)[2]
     return phase(s, s.n_move, heading, not family.clear_ahead(s, heading, distance))
+
+
+#: The two-wheel family's step on this body (tasks.kernels.two_wheel.act, through
+#: tasks.kernels.env_step.action): the turn, move and halt phases, then how a refused
+#: move's state is kept and given back.
+PHASES = (turn, move, halt, keep, back)

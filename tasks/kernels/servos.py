@@ -68,3 +68,9 @@ def halt(s):
     """Both servos' speeds 0."""
     drive(s, 0.0, 0.0)
     return bindings.OK, 0
+
+
+#: The two-wheel family's step on this body (tasks.kernels.two_wheel.act, through
+#: tasks.kernels.env_step.action): the turn, move and halt phases, then how a refused
+#: move's state is kept and given back.
+PHASES = (turn, move, halt, family.save_state, family.restore_state)

@@ -12,7 +12,7 @@ from numba import njit
 
 from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from compiled import records
-from tasks.kernels import bindings
+from tasks.kernels import bindings, sensing
 from tasks.kernels.body import BODY_FIELDS, factors, step_phase
 from tasks.readings import codes
 
@@ -150,3 +150,11 @@ def velocity_reading(s, v, noise):
             code = np.rint(x * half + half)
             v[i] = (code - half) / half * full
     return v
+
+
+@njit(cache=True)
+def velocity(s, vel, noise):
+    """The floating robot's velocity reading into vel: the base's velocity
+    (sensing.velocity), then velocity_reading."""
+    v = sensing.velocity(s.m, s.d, s.base, s.velocity, s.velocity6)
+    vel[:] = velocity_reading(s, v, noise)

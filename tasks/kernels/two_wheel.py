@@ -12,23 +12,25 @@ Section 3.3: it undoes the move and turns all of it; kept only to remake protoco
 runs.)
 
 `act` is that logic. How a body turns by an angle or moves a distance is its
-realisation's: `act` takes the realisation's phases as arguments (turn, move, halt, and
-the save and restore of a refused move), and tasks.kernels.env_step' table passes each
-realisation's own (servos, wheels, wheel_motors, joint_motors, gait).
+realisation's: `act` runs the phases (turn, move, halt, and the save and restore of a
+refused move) of the realisation whose record it is given, its kernels' PHASES, picked
+by the record's type when numba compiles it (tasks.realisations.of_record).
 
-Not cached on disk itself (plain ``@njit``): it compiles in its realisation's phases, so
-it is cached inside the entry points of tasks.kernels.env_step, whose module reaches every
+Not cached on disk itself (an overload): it compiles in its realisation's phases, so it is
+cached inside the entry points of tasks.kernels.env_step, whose module reaches every
 realisation (compiled.cache).
 """
 import math
 
 import numpy as np
 from numba import njit
+from numba.extending import overload
 
 from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from tasks.kernels import bindings, sensing
 from tasks.kernels.body import base_pose, factors
 from tasks.readings import codes
+from tasks.realisations import of_record
 
 #: The family's fields of a record, after tasks.kernels.body.BODY_FIELDS: the substeps of the turn
 #: and the move phases, the largest turn (rad) and move (units) per step, the tolerance
@@ -145,46 +147,60 @@ def restore_state(s):
     s.act[:] = s.act0
 
 
-@njit
-def act(s, a, u, turn_phase, move_phase, halt, save, restore):
+def act(s, a, u):
     """One step of the family for the clipped action a and the action noise's uniform
-    draws u, on a realisation's phases: turn_phase(s, angle, leftover) and
+    draws u, on the phases of the realisation whose record s is (its kernels' PHASES, by
+    its row of tasks.realisations.REALISATIONS): turn_phase(s, angle, leftover) and
     move_phase(s, distance) -> (status, substeps), halt(s) -> (status, substeps) (the
     body's drive at rest, stalled parts giving up the rest), save(s) and restore(s) (the
     state a refused move returns to; the caller of restore runs mj_forward). The turn,
-    the move, a blocked move's leftover turn, the halt. Returns (status, substeps run)."""
-    noise_turn, noise_move = factors(s, u)
-    turn = -a * s.max_turn * noise_turn  # counter-clockwise positive
-    move = s.max_move * (1.0 - abs(a)) * noise_move
-    sign = 1.0 if turn > 0 else -1.0
-    status, n = turn_phase(s, turn, OWN_TURN)
-    if status != bindings.OK:
-        return status, n
-    if s.blocked_move == BLOCKED_REFUSE:
-        save(s)
-    x0, y0, heading = base_pose(s)
-    c, sn = math.cos(heading), math.sin(heading)
-    status, k = move_phase(s, move)
-    n += k
-    if status != bindings.OK:
-        return status, n
-    x, y, _ = base_pose(s)
-    rest = move - ((x - x0) * c + (y - y0) * sn)
-    if rest > s.tolerance:
-        if s.leftover_turn == LEFTOVER_AWAY:
-            sign = away_sign(sensing.ranges(s.m, s.d, s.flags, s.sensordata, s.beam0, s.beam1,
-                                            s.metres_to_units, s.radius), sign)
+    the move, a blocked move's leftover turn, the halt. Returns (status, substeps run).
+    Compiled code only."""
+    raise TypeError("tasks.kernels.two_wheel.act runs in compiled code (env_step.step)")
+
+
+@overload(act)
+def _act(s, a, u):
+    realisation = of_record(s)
+    if realisation is None or realisation.drive != "two_wheel":
+        return None
+    turn_phase, move_phase, halt, save, restore = realisation.kernels().PHASES
+
+    def impl(s, a, u):
+        noise_turn, noise_move = factors(s, u)
+        turn = -a * s.max_turn * noise_turn  # counter-clockwise positive
+        move = s.max_move * (1.0 - abs(a)) * noise_move
+        sign = 1.0 if turn > 0 else -1.0
+        status, n = turn_phase(s, turn, OWN_TURN)
+        if status != bindings.OK:
+            return status, n
         if s.blocked_move == BLOCKED_REFUSE:
-            restore(s)
-            before = s.bad_qacc[0]
-            bindings.mj_forward(s.m, s.d)
-            if s.bad_qacc[0] != before:
-                return bindings.UNSTABLE, n
-            rest = move
-        leftover = sign * rest * s.max_turn / s.max_move
-        status, k = turn_phase(s, leftover, LEFTOVER)
+            save(s)
+        x0, y0, heading = base_pose(s)
+        c, sn = math.cos(heading), math.sin(heading)
+        status, k = move_phase(s, move)
         n += k
         if status != bindings.OK:
             return status, n
-    status, k = halt(s)
-    return status, n + k
+        x, y, _ = base_pose(s)
+        rest = move - ((x - x0) * c + (y - y0) * sn)
+        if rest > s.tolerance:
+            if s.leftover_turn == LEFTOVER_AWAY:
+                sign = away_sign(sensing.ranges(s.m, s.d, s.flags, s.sensordata, s.beam0,
+                                                s.beam1, s.metres_to_units, s.radius), sign)
+            if s.blocked_move == BLOCKED_REFUSE:
+                restore(s)
+                before = s.bad_qacc[0]
+                bindings.mj_forward(s.m, s.d)
+                if s.bad_qacc[0] != before:
+                    return bindings.UNSTABLE, n
+                rest = move
+            leftover = sign * rest * s.max_turn / s.max_move
+            status, k = turn_phase(s, leftover, LEFTOVER)
+            n += k
+            if status != bindings.OK:
+                return status, n
+        status, k = halt(s)
+        return status, n + k
+
+    return impl

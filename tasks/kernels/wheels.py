@@ -108,3 +108,8 @@ def halt(s):
     s.act[s.right_act] = s.qpos[s.right_q]
     return bindings.OK, 0
 
+
+#: The two-wheel family's step on this body (tasks.kernels.two_wheel.act, through
+#: tasks.kernels.env_step.action): the turn, move and halt phases, then how a refused
+#: move's state is kept and given back.
+PHASES = (turn, move, halt, family.save_state, family.restore_state)

@@ -83,7 +83,7 @@ class Action:
 
     def physics_attributes(self) -> dict:
         """The class attributes the realisation's Physics takes from the mount (its
-        joints, gains, legs...; tasks.realisations.Realisation.physics)."""
+        joints, gains, legs...; tasks.realisations.Realisation.physics_class)."""
         return {}
 
     def on_floor(self, spec) -> bool:

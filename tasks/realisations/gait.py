@@ -63,7 +63,7 @@ Leg = tuple[str, tuple[str, ...], tuple[str, ...]]
 class GaitPhysics(navigation.Physics):
     """A legged base on a free joint, its legs' joints under the gait: PD loops onto
     their torque motors, or their targets onto position servos. A mount's parameters and
-    legs are set on a subclass (tasks.realisations.Realisation.physics)."""
+    legs are set on a subclass (tasks.realisations.Realisation.physics_class)."""
 
     Record = GaitRecord
     gait = dict(PARAMETERS)

@@ -15,7 +15,7 @@ from tasks.simulator import mujoco
 
 class JointMotorsPhysics(Planned):
     """A mount's forward and turn joints under the file's own actuators on them. A mount's
-    joints and gains are set on a subclass (tasks.realisations.Realisation.physics)."""
+    joints and gains are set on a subclass (tasks.realisations.Realisation.physics_class)."""
 
     Record = JointMotorsRecord
     #: The file's forward and turn joints.

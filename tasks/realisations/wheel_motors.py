@@ -14,7 +14,7 @@ from tasks.simulator import mujoco
 class WheelMotorsPhysics(Planned):
     """Two wheel hinges (``left``, ``right``) turned through the file's own motors. A
     mount's motor count and PD gains (kp N m/rad, kv N m s/rad) are set on a subclass
-    (tasks.realisations.Realisation.physics)."""
+    (tasks.realisations.Realisation.physics_class)."""
 
     Record = WheelMotorsRecord
     motor_count = 2
