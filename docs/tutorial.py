@@ -41,7 +41,7 @@ import numpy as np
 import ebrl
 import models
 import tasks
-from experiments.outputs import rendering, report
+from experiments.outputs import plots, rendering
 
 OUT = pathlib.Path(os.environ.get("EBRL_TUTORIAL_OUT") or tempfile.mkdtemp(prefix="ebrl_tutorial_"))
 OUT.mkdir(parents=True, exist_ok=True)
@@ -102,19 +102,19 @@ print(f"the memory chose {agent.memory_decisions} of the {STEPS} actions")
 #
 # The path of the first trial and of the last complete one, in the room as the paper's
 # Figure 2 draws it, and the reward summed over the steps as its Figure 3 does.
-# `experiments.outputs.report.draw_room` draws any room's map (walls and goal).
+# `experiments.outputs.plots.draw_room` draws any room's map (walls and goal).
 
 # %%
 ends = [0] + goals_at
 fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 3.6))
-report.draw_room(ax)
+plots.draw_room(ax)
 first = path[: ends[1] + 1] if len(goals_at) else path
 ax.plot(*first.T, lw=0.5, color="0.6", label=f"first trial ({len(first) - 1} steps)")
 if len(goals_at) >= 2:
     last = path[ends[-2] + 1: ends[-1] + 1]
     ax.plot(*last.T, lw=1.5, color="tab:red", label=f"trial {len(goals_at)} ({len(last)} steps)")
 ax.plot(*path[0], "o", color="tab:blue")
-report.legend_below(ax, fontsize=8)
+plots.legend_below(ax, fontsize=8)
 bx.plot(np.arange(1, STEPS + 1), np.cumsum(rewards), color="tab:blue")
 bx.set_xlabel("steps")
 bx.set_ylabel("cumulative reward (goals)")

@@ -44,3 +44,11 @@ TWO_WHEEL_GOALS = {"random_below_30": 43, "avoidance_min": 49}
 #: 2: "in one of 50 cases, it could not reach at the goal within 30,000 steps").
 FIRST_TRIALS = {key: dict(figures["first_trial_steps"], runs=SEEDS)
                 for key, figures in RESULTS.items()}
+
+
+def reported(group, condition=None):
+    """Section 3.6's figures (RESULTS) for a summary group's drive and condition; None in
+    a room other than the paper's (the paper ran its own room only)."""
+    if group.get("room"):
+        return None
+    return RESULTS.get((group.get("drive"), condition or group["condition"]))

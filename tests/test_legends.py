@@ -9,7 +9,7 @@ import models
 import tasks
 from ebrl.agent import DECIDERS
 from experiments.outputs import overlays as geometry
-from experiments.outputs import rendering, report
+from experiments.outputs import plots, rendering
 from experiments.running import results
 
 #: The slow tier (pyproject.toml's markers): frames rendered and runs made.
@@ -129,7 +129,7 @@ def test_the_traces_figure_legends_cover_neither_start_nor_goal(tmp_path):
     label = "two_wheel@small"
     assert {c: r["metrics"]["goals"] >= 2 for (_, c, _), r in runs.items()} == {
         "random": True, "avoidance": True}  # each axes has its traces and legend
-    fig = report.traces_plot(out, runs, label)
+    fig = plots.traces_plot(out, runs, label)
     try:
         fig.canvas.draw()
         renderer = fig.canvas.get_renderer()
@@ -151,4 +151,4 @@ def test_the_traces_figure_legends_cover_neither_start_nor_goal(tmp_path):
             (x0, y0), (x1, y1) = ax.transData.transform(cells["goal"])
             assert not (old.x1 <= x0 or old.x0 >= x1 or old.y1 <= y0 or old.y0 >= y1)
     finally:
-        report.pyplot().close(fig)
+        plots.pyplot().close(fig)

@@ -16,7 +16,7 @@ import numpy as np
 
 from experiments import paper
 from experiments.outputs import multiverse as mv
-from experiments.outputs import report
+from experiments.outputs import plots, report
 from experiments.running import results
 from experiments.studies import multiverse as study
 from tasks.protocols import PROTOCOL_VERSION
@@ -52,7 +52,7 @@ def spec_curve(claim, factor_list, chosen, universes, records, path):
     if len(definitions) > 1:
         labels.append(f"{mv.CHOICE}: {mv.DEFINITIONS[1]}")
         cells.append([d == mv.DEFINITIONS[1] for _, d in pts])
-    plt = report.pyplot()
+    plt = plots.pyplot()
     n = len(pts)
     fig, (ax, grid) = plt.subplots(
         2, 1, sharex=True, figsize=(min(max(6.0, 0.06 * n + 3.5), 18.0), 3.2 + 0.22 * len(cells)),
@@ -98,7 +98,7 @@ def spec_curve(claim, factor_list, chosen, universes, records, path):
                     "the alternative level)", fontsize=8)
     with warnings.catch_warnings():  # tight_layout and the grid's axes: harmless
         warnings.simplefilter("ignore", UserWarning)
-        return report.save(fig, path)
+        return plots.save(fig, path)
 
 
 # -- MULTIVERSE.md ---------------------------------------------------------------------

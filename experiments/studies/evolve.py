@@ -31,7 +31,7 @@ import pathlib
 
 from ebrl import behaviour as genomes
 from experiments.checks import behaviour_file
-from experiments.outputs import report
+from experiments.outputs import plots, report
 from experiments.running import results
 from experiments.running import runner
 from experiments.running.execution import RunSpec
@@ -224,7 +224,7 @@ def fitness_rows(s):
 
 
 def fitness_figure(s, path):
-    plt = report.pyplot()
+    plt = plots.pyplot()
     done = complete(s)
     fig, ax = plt.subplots(figsize=(7, 3.5))
     ax.scatter([generation(t) for t in done], [study.deepest(t)["goals"] for t in done],
@@ -235,7 +235,7 @@ def fitness_figure(s, path):
     ax.set_xlabel("generation (0: the starting genome)")
     ax.set_ylabel("mean goals over the training seeds")
     ax.legend(loc="lower right", fontsize=8)
-    return report.save(fig, path, dpi=110)
+    return plots.save(fig, path, dpi=110)
 
 
 def best_genome(s, problem):

@@ -19,7 +19,7 @@ import functools
 import pathlib
 
 from ebrl import behaviour as genomes
-from experiments.outputs import report
+from experiments.outputs import plots, report
 from experiments.running import aggregate, results
 from experiments.studies import study
 from experiments.studies import evolve
@@ -173,12 +173,12 @@ def _seeds(seeds):
 def traces_figure(hand, learner, robot, path):
     """One held-out seed (the hand-coded learner's median), its first trial and a late one,
     hand-coded beside evolved."""
-    plt = report.pyplot()
+    plt = plots.pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(11, 3.9))
     runs = _folder(hand)[0]
-    seed = report.typical_seed(runs, robot, CONDITION)
+    seed = plots.typical_seed(runs, robot, CONDITION)
     for ax, (label, folder) in zip(axes, (("hand-coded", hand), ("evolved for the learner", learner))):
-        report.draw_room(ax)
+        plots.draw_room(ax)
         try:
             paths = results.trial_paths(*results.load_trace(folder, robot, CONDITION, seed))
         except (FileNotFoundError, TypeError):
@@ -194,9 +194,9 @@ def traces_figure(hand, learner, robot, path):
         ax.plot(*paths[k].T, lw=1.2, color="tab:red",
                 label=f"typical late trial, #{k + 1} ({len(paths[k]) - 1} steps)")
         ax.set_title(f"{label}, seed {seed}: {len(paths)} goals")
-        report.legend_below(ax, fontsize=7)
+        plots.legend_below(ax, fontsize=7)
     fig.suptitle(f"{robot}, EBRL with avoidance")
-    return report.save(fig, path)
+    return plots.save(fig, path)
 
 
 def build(evolve_dir, hand, evolved, figures):

@@ -28,7 +28,7 @@ import math
 import pathlib
 
 from experiments import paper
-from experiments.outputs import report
+from experiments.outputs import plots, report
 from experiments.running import aggregate, results, schema
 from experiments.running import runner, settings
 from experiments.studies import study
@@ -248,7 +248,7 @@ def importances(s, names):
 def objective_figure(s, path):
     """The objective of every complete trial over trial numbers, and the best so far."""
     import optuna
-    plt = report.pyplot()
+    plt = plots.pyplot()
     done = s.get_trials(deepcopy=False, states=(optuna.trial.TrialState.COMPLETE,))
     xs = [t.number for t in done]
     ys = [t.value for t in done]
@@ -259,11 +259,11 @@ def objective_figure(s, path):
         best = min(best, y)
         line.append(best)
     ax.step(xs, line, where="post", color="C3", label="best so far")
-    report.log_y(ax)
+    plots.log_y(ax)
     ax.set_xlabel("trial")
     ax.set_ylabel("objective (lower is closer to the paper)")
     ax.legend(loc="upper right", fontsize=8)
-    return report.save(fig, path, dpi=110)
+    return plots.save(fig, path, dpi=110)
 
 
 def _figure_rows(groups_by_name):

@@ -153,7 +153,7 @@ def table(rows):
 
 def figure(rows, path):
     """Gains against the mean shortest path, one line per robot, with 95% intervals."""
-    from experiments.outputs.report import pyplot, save
+    from experiments.outputs.plots import pyplot, save
     plt = pyplot()
     fig, axes = plt.subplots(1, 3, figsize=(11, 3.4))
     for ax, key, title in zip(axes, ("first_gain", "trial_gain", "goal_gain"),
