@@ -1,5 +1,5 @@
 """A throwaway PostgreSQL server for the tests of a study shared by several workers
-(experiments.checks.pgserver: the server's own binaries, initdb into a temporary folder, a
+(experiments.ops.pgserver: the server's own binaries, initdb into a temporary folder, a
 unix socket there only, as the `postgres` user when run as root, stopped at the end).
 `postgres_url` gives each test a fresh database. Where no server can be started the tests
 skip with the reason; with EBRL_REQUIRE_POSTGRES=1 (.ci/run) they fail instead."""
@@ -12,7 +12,7 @@ import pytest
 @pytest.fixture(scope="session")
 def postgres_server():
     """The socket folder of a running throwaway server."""
-    from experiments.checks import pgserver
+    from experiments.ops import pgserver
     try:
         with pgserver.server() as folder:
             yield folder
@@ -28,7 +28,7 @@ _databases = itertools.count(1)
 @pytest.fixture
 def postgres_url(postgres_server):
     """A fresh database on the server, as a plain postgresql:// URL (the user's form)."""
-    from experiments.checks import pgserver
+    from experiments.ops import pgserver
     return pgserver.database(postgres_server, f"ebrl_{next(_databases)}")
 
 

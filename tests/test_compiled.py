@@ -319,11 +319,11 @@ def test_the_agents_the_tasks_and_the_loops_damaged_entries_mend_with_the_same_b
 
 
 def test_the_warm_up_reaches_every_realisation_and_learner():
-    """make test's warm-up (experiments.checks.warm) runs the kernels of every realisation
+    """make test's warm-up (experiments.ops.warm) runs the kernels of every realisation
     a shipped robot or mount uses, both loops and every learner, so that no test process
     compiles what another is compiling; one realisation's runs in one process. joint_motors
     is no shipped file's: its tests mount their own."""
-    from experiments.checks import warm
+    from experiments.ops import warm
     from tasks.realisations import REALISATIONS
     from tasks.robots import resolve
     groups = warm.specs()

@@ -16,7 +16,7 @@ import pytest
 
 import helpers
 from helpers import ROOT, ebrl_here
-from experiments.checks import procs
+from experiments.ops import procs
 
 
 ebrl = functools.partial(helpers.ebrl, check=True)  # a failure raises, unless check=False

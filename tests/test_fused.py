@@ -133,7 +133,7 @@ def test_what_a_stretch_cannot_run_takes_the_step_by_step_loop():
 
 
 def test_bench_times_the_fused_loop_beside_the_step_loop():
-    from experiments.checks import bench
+    from experiments.ops import bench
     row = bench.measure("two_wheel", 200, blocks=3)  # the median leaves out the first (loading)
     for key in ("raw_physics", "env_step", "agent", "whole_loop", "fused_loop",
                 "reference_pass"):

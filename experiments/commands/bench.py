@@ -1,4 +1,4 @@
-"""`ebrl bench`: microseconds per agent step, by part (experiments.checks.bench). It takes
+"""`ebrl bench`: microseconds per agent step, by part (experiments.ops.bench). It takes
 the robots `ebrl run` takes: registered names, a mount, or a robot .xml file with --drive."""
 from experiments.checks import validate
 from experiments.commands import arguments
@@ -21,6 +21,6 @@ def run(args):
         check_robots(args)  # a robot file without --drive, or a bad one: one line
     except ValueError as e:
         return fail(str(e))
-    from experiments.checks import bench
+    from experiments.ops import bench
     bench.main(args.steps, args.blocks, selected_robots(args), args.room, args.drive)
     return 0

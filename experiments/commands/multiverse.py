@@ -87,7 +87,7 @@ def _bench(out, measure):
     path = out / "bench.json"
     check = functools.partial(schema.check_bench, robots=PAPER_ROBOTS)
     if measure:
-        from experiments.checks import bench
+        from experiments.ops import bench
         from tasks.kernels.bindings import stage_timers_off
         with stage_timers_off():
             rows = {r: bench.measure(r, 1000, 3) for r in PAPER_ROBOTS}

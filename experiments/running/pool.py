@@ -55,7 +55,7 @@ def context():
     ignore SIGINT as spawned ones did. It lives as long as the process that started it,
     and its workers get the environment it had then (with worker.SINGLE_THREAD): a
     variable set later in the same process reaches no worker. The workers are the server's
-    children, not the command's (experiments.checks.procs.pool_workers finds them)."""
+    children, not the command's (experiments.ops.procs.pool_workers finds them)."""
     import multiprocessing
     if "forkserver" not in multiprocessing.get_all_start_methods():
         return multiprocessing.get_context("spawn")

@@ -1,5 +1,5 @@
 """A throwaway PostgreSQL server, for the tests (tests/conftest.py) and the study soak
-(experiments.checks.studysoak): the server's own binaries (Debian's postgresql package,
+(experiments.ops.studysoak): the server's own binaries (Debian's postgresql package,
 /usr/lib/postgresql/<version>/bin), initdb into a temporary folder, a unix socket in that
 folder only (no TCP port), stopped and removed at the end. initdb refuses root, so as root
 the server runs as the package's `postgres` user (runuser)."""

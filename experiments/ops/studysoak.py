@@ -1,11 +1,11 @@
 """A soak of a study shared by several workers (a benchmark, not a test):
 
-    python -m experiments.checks.studysoak [--storage URL] [--trials 60] [--workers 2]
+    python -m experiments.ops.studysoak [--storage URL] [--trials 60] [--workers 2]
                                            [--every 2-6] [--steps 200] [--seed 1]
 
 `ebrl fit` (tiny trials: one reading, one seed, --steps steps a run) run by --workers
 processes on one PostgreSQL study (--storage, or a database on a throwaway server,
-experiments.checks.pgserver) while one worker, picked at random, is killed (SIGKILL, its
+experiments.ops.pgserver) while one worker, picked at random, is killed (SIGKILL, its
 run workers with it) every few seconds and started again at once; a worker that ends
 with exit 0 stays ended. Then every complete trial's settings are run again by one clean
 worker in an SQLite study of their own. It prints the figures and exits 1 unless the
@@ -23,7 +23,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from experiments.checks import pgserver
+from experiments.ops import pgserver
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 

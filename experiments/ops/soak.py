@@ -1,6 +1,6 @@
 """A soak of the runner's fault handling (a benchmark, not a test):
 
-    python -m experiments.checks.soak [--seeds 0-127] [--steps 200] [--workers 2] [--every 3-8]
+    python -m experiments.ops.soak [--seeds 0-127] [--steps 200] [--workers 2] [--every 3-8]
 
 `ebrl run` on the paper's robots, both conditions and the given seeds (512 short runs by
 default) while a worker process, picked at random among those past their start (1.5 s
@@ -21,7 +21,7 @@ import sys
 import tempfile
 import time
 
-from experiments.checks import procs
+from experiments.ops import procs
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]  # the checkout: `python -m experiments` from there
 
@@ -80,7 +80,7 @@ def _runs(out):
 
 
 def main(argv=None):
-    p = argparse.ArgumentParser(prog="python -m experiments.checks.soak", description=__doc__.split(
+    p = argparse.ArgumentParser(prog="python -m experiments.ops.soak", description=__doc__.split(
         "\n\n")[0])
     p.add_argument("--seeds", default="0-127", help="seeds per robot and condition")
     p.add_argument("--steps", type=int, default=200)

@@ -1,6 +1,6 @@
 """Every compiled kernel into numba's on-disk cache, once, before many processes want it.
 
-`make test` runs this first (`python -m experiments.checks.warm`). On a fresh clone no
+`make test` runs this first (`python -m experiments.ops.warm`). On a fresh clone no
 kernel is cached: a cold run spends most of its time compiling (docs/speed.md, "Compiling,
 and what was not adopted"), and the test processes that start together (two pytest
 workers, the `ebrl` commands and pool workers they start) would each compile the same
