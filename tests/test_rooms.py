@@ -191,10 +191,19 @@ def test_the_maze_study_runs_its_budget_rule_and_writes_its_table(tmp_path):
     ran = mazes.run(tmp_path, specs, workers=1, progress=False)
     assert ran.made == len(specs) and not ran.failed
     path = mazes.write(tmp_path, specs, sizes, 1, 2, 15)
-    rows = json.loads((tmp_path / "mazes.json").read_text())["rows"]
+    record = json.loads((tmp_path / "mazes.json").read_text())
+    rows = record["rows"]
     assert {(r["robot"], r["size"]) for r in rows} == {
         (robot, size) for robot in mazes.ROBOTS for size in ("5x5", "7x4")}
     assert all(r["units"] == 2 for r in rows)
+    # each run's record: what its run.json says, one row a run
+    assert len(record["runs"]) == len(specs)
+    for r in record["runs"]:
+        spec = next(s for s in specs if (s.robot, s.condition, s.seed, s.room) == (
+            r["robot"], r["condition"], r["seed"], f"random:{r['size']}:{r['maze']}"))
+        made = results.read_run_json(results.run_dir(tmp_path, spec) / "run.json")["metrics"]
+        assert r["goals"] == made["goals"] and r["steps"] == spec.steps
+        assert r["first_trial_steps"] == made["first_trial_steps"]
     text = path.read_text()
     assert "| two_wheel | 7x4 | 2 |" in text and (tmp_path / "figures" / "mazes.png").stat().st_size > 0
 

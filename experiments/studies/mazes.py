@@ -180,15 +180,30 @@ def figure(rows, path):
     save(fig, path)
 
 
+#: What mazes.json keeps of each complete run (its metrics in run.json): the data behind
+#: the table and the figure, a few dozen bytes a run, so a study's record can be committed.
+RUN_FIELDS = ("first_trial_steps", "steps_per_trial", "goals", "steps", "shortest")
+
+
+def runs(out, specs):
+    """Each complete run's RUN_FIELDS, one row a run: robot, size, maze, seed, condition."""
+    return [{"robot": robot, "size": f"{size[0]}x{size[1]}", "maze": maze, "seed": seed,
+             "condition": condition, **{k: metrics[k] for k in RUN_FIELDS}}
+            for (robot, size), units in sorted(_units(out, specs).items())
+            for (maze, seed), by_condition in sorted(units.items())
+            for condition, metrics in sorted(by_condition.items())]
+
+
 def write(out, specs, sizes, mazes, seeds, per_cell):
-    """MAZES.md, mazes.json and figures/mazes.png under out; returns MAZES.md's path."""
+    """MAZES.md, mazes.json (the rows of the table and each run's record, `runs`) and
+    figures/mazes.png under out; returns MAZES.md's path."""
     out = pathlib.Path(out)
     rows = summarize(out, specs)
     (out / "figures").mkdir(exist_ok=True)
     figure(rows, out / "figures" / "mazes.png")
     results.atomic_write(out / "mazes.json", results.dumps(
         {"sizes": [f"{w}x{h}" for w, h in sizes], "mazes": mazes, "seeds": seeds,
-         "steps_per_cell": per_cell, "rows": rows}))
+         "steps_per_cell": per_cell, "rows": rows, "runs": runs(out, specs)}))
     text = "\n".join([
         f"# The maze study: {out}", "",
         f"Sizes {', '.join(f'{w}x{h}' for w, h in sizes)}; {mazes} mazes per size, {seeds} "
