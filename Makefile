@@ -12,32 +12,37 @@ DEMO_OUT ?= demo_results
 
 .PHONY: demo lint test test-fast bench clean lock docs
 
+# The venv, with uv in it (pinned; pip installs it): uv installs the locks, about 10 s on a
+# fresh machine where pip took 30-50 s (it fetches in parallel and links from its cache;
+# docs/speed.md). pip stays in the venv for the user's own installs.
+UV_VERSION := 0.13.9
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install -q --upgrade pip
+	$(BIN)/python -m pip install -q "uv==$(UV_VERSION)"
 
 # The exact environment: requirements.lock (the base install) and requirements-test.lock
-# (with the test and Ray extras) pin every package with its hashes; the project itself is
-# installed on top without dependencies (its build backend, setuptools, is in the lock).
-# `make lock` makes both again from pyproject.toml's ranges. LOCK=no installs from the
-# ranges instead (Python 3.10, which the lock's numpy does not support; `make clean` first).
+# (with the test and Ray extras) pin every package with its hashes (--require-hashes, as
+# pip's hash-checking mode); the project itself is installed on top without dependencies
+# (its build backend, setuptools, is in the lock). `make lock` makes both again from
+# pyproject.toml's ranges. LOCK=no installs from the ranges instead (Python 3.10, which the
+# lock's numpy does not support; `make clean` first).
 LOCK ?= yes
-PIP := $(BIN)/python -m pip
+UV_PIP := $(BIN)/uv pip install -q --python $(BIN)/python
 ifeq ($(LOCK),yes)
-INSTALL_BASE = $(PIP) install -q -r requirements.lock
-INSTALL_TEST = $(PIP) install -q --no-compile -r requirements-test.lock
-SELF = $(PIP) install -q --no-deps --no-build-isolation -e .
+INSTALL_BASE = $(UV_PIP) --compile-bytecode --require-hashes -r requirements.lock
+INSTALL_TEST = $(UV_PIP) --require-hashes -r requirements-test.lock
+SELF = $(UV_PIP) --no-deps --no-build-isolation -e .
 else
-INSTALL_BASE = $(PIP) install -q -e .
-INSTALL_TEST = $(PIP) install -q -e ".[test,ray]"
+INSTALL_BASE = $(UV_PIP) --compile-bytecode -e .
+INSTALL_TEST = $(UV_PIP) -e ".[test,ray]"
 SELF = true
 endif
 
 # One stamp per set of extras, redone when pyproject.toml or a lock changes. The test
 # lock holds the base lock's every package at its version (make lock), so one install of
-# it stands for both stamps: make test on a fresh clone runs pip once, not twice. It skips
-# pip's compiling of every installed module to bytecode (more than half of its minute):
-# the test processes write the bytecode of what they import, once (docs/speed.md).
+# it stands for both stamps: make test on a fresh clone installs once, not twice. It does
+# not compile every installed module to bytecode (make demo's base install does): the
+# test processes write the bytecode of what they import, once (docs/speed.md).
 $(VENV)/.installed: $(BIN)/python pyproject.toml requirements.lock
 	$(INSTALL_BASE)
 	$(SELF)
@@ -48,12 +53,11 @@ $(VENV)/.installed-test: $(BIN)/python pyproject.toml requirements.lock requirem
 	$(SELF)
 	touch $@ $(VENV)/.installed
 
-# uv in its own folder (.lock-tools), never in .venv; --fork-strategy fewest: one version
-# of each package for every Python from 3.11 on, the base lock the test lock's versions.
-UV_COMPILE = .lock-tools/bin/uv pip compile pyproject.toml --universal --fork-strategy fewest \
+# The venv's uv; --fork-strategy fewest: one version of each package for every Python
+# from 3.11 on, the base lock the test lock's versions.
+UV_COMPILE = $(BIN)/uv pip compile pyproject.toml --universal --fork-strategy fewest \
 	--python-version 3.11 --generate-hashes --quiet
-lock:
-	test -x .lock-tools/bin/uv || { $(PYTHON) -m venv .lock-tools && .lock-tools/bin/python -m pip install -q uv; }
+lock: $(BIN)/python
 	$(UV_COMPILE) --extra test --extra ray -o requirements-test.lock
 	$(UV_COMPILE) -c requirements-test.lock -o requirements.lock
 
