@@ -332,3 +332,12 @@ def test_the_warm_up_reaches_every_realisation_and_learner():
     assert set(REALISATIONS) - {resolve(s.robot).realisation for s, _ in pairs} == {"joint_motors"}
     assert {s.agent for s, _ in pairs} == set(AGENTS)
     assert {fused for _, fused in pairs} == {True, False}
+    # The agent and the loop compiled by one process (the first group's run) before any
+    # other realisation's run; that realisation's environment stepped before it, no agent.
+    order = list(warm.jobs(groups))
+    assert order[0] == (("run", groups[0]), ())
+    first = ("run", groups[0][0][0].robot)
+    for group in groups[1:]:
+        robot = group[0][0].robot
+        env, run = order.index((("env", robot), ())), order.index((("run", group), (first, ("env", robot))))
+        assert env < run

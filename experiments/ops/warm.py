@@ -4,13 +4,19 @@
 kernel is cached: a cold run spends most of its time compiling (docs/speed.md, "Compiling,
 and what was not adopted"), and the test processes that start together (two pytest
 workers, the `ebrl` commands and pool workers they start) would each compile the same
-kernels before the first of them has written its cache entry. Here one short run of each robot, condition
-and learner, in both loops (the compiled stretches and dm_control's step by step), compiles
-each kernel once, on two processes; every later process loads them (compiled/cache.py).
-The runs go to the processes one realisation at a time (tasks.realisations): the robots of
-a realisation share its kernels, so a process that has compiled them runs the others in
-no time, where two processes given one realisation's robots at once would both compile
-them. A warm cache makes this a few seconds. Nothing is written but numba's cache.
+kernels before the first of them has written its cache entry. Here one short run of each
+robot, condition and learner, in both loops (the compiled stretches and dm_control's step
+by step), compiles each kernel once, on two processes; every later process loads them
+(compiled/cache.py). A warm cache makes this a few seconds. Nothing is written but
+numba's cache.
+
+No two processes compile the same kernel at once (tasks.realisations: the robots of a
+realisation share its kernels; every realisation shares the agent and the loop). One
+process runs the paper's two-wheel realisation first, which compiles the agent and the loop
+(about half of the whole); meanwhile the other steps each other realisation's environment
+(`tasks.load`, a few steps), which compiles its kernels and not the agent's. A
+realisation's runs start once both are done, and compile only what joins its kernels to
+the loop.
 """
 import concurrent.futures
 import multiprocessing
@@ -18,6 +24,8 @@ import sys
 import time
 
 STEPS = 30
+#: Steps of a realisation's environment in the first phase.
+ENV_STEPS = 3
 
 
 def specs():
@@ -47,11 +55,53 @@ def _run(batch):
     return len(batch)
 
 
+def _step_env(robot):
+    """A few steps of robot's environment, no agent: its realisation's kernels."""
+    import numpy as np
+
+    import tasks
+    env = tasks.load(robot, seed=0)
+    try:
+        env.reset()
+        for _ in range(ENV_STEPS):
+            env.step(np.zeros(env.action_spec().shape))
+    finally:
+        env.close()
+    return 0
+
+
+def jobs(groups):
+    """The jobs in the order they may start: ("run", group) for the first group; ("env",
+    robot) and, after it and the first group's run, ("run", group) for each other group."""
+    first, *others = groups
+    yield ("run", first), ()
+    for group in others:
+        robot = group[0][0].robot
+        yield ("env", robot), ()
+        yield ("run", group), (("run", first[0][0].robot), ("env", robot))
+
+
 def main(workers=2):
     start = time.perf_counter()
+    waiting = [(kind, what, after) for (kind, what), after in jobs(specs())]
+    done, made = set(), 0
     context = multiprocessing.get_context("spawn")
     with concurrent.futures.ProcessPoolExecutor(workers, mp_context=context) as pool:
-        made = sum(pool.map(_run, specs()))  # one realisation at a time, to the first free
+        running = {}
+        while waiting or running:
+            # Fill free processes with the first jobs whose jobs before them are done.
+            for job in [j for j in waiting if all(a in done for a in j[2])]:
+                if len(running) == workers:
+                    break
+                kind, what, _ = job
+                waiting.remove(job)
+                key = (kind, what if kind == "env" else what[0][0].robot)
+                running[pool.submit(_run if kind == "run" else _step_env, what)] = key
+            finished, _ = concurrent.futures.wait(
+                running, return_when=concurrent.futures.FIRST_COMPLETED)
+            for future in finished:
+                made += future.result()
+                done.add(running.pop(future))
     print(f"warm: {made} short runs, every kernel in numba's cache "
           f"({time.perf_counter() - start:.0f} s)", file=sys.stderr)
     return 0
