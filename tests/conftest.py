@@ -53,7 +53,7 @@ def pytest_collection_modifyitems(config, items):
         module = item.path.name
         fixtures = set(getattr(item, "fixturenames", ()))
         if (module == "test_cluster.py" or "_ray_" in f"_{item.name}"
-                or fixtures & {"cluster", "postgres_server", "postgres_url"}):
+                or fixtures & {"postgres_server", "postgres_url"}):
             item.add_marker(pytest.mark.xdist_group("processes"))
         elif module in _ONE_WORKER_MODULES:
             item.add_marker(pytest.mark.xdist_group(module))

@@ -150,15 +150,6 @@ def test_worker_count_does_not_change_results(clean_run, tmp_path):
     assert summary(tmp_path / "w2") == summary(clean_run)
 
 
-@pytest.mark.slow
-def test_ray_backend_gives_the_same_results(clean_run, tmp_path):
-    pytest.importorskip("ray")
-    env = dict(os.environ)
-    env.pop("RAY_ADDRESS", None)
-    ebrl("run", *SMALL, "--backend", "ray", "--workers", "2", "--out", tmp_path / "ray", env=env)
-    assert arrays(tmp_path / "ray") == arrays(clean_run)
-
-
 KILL_ARGS = ["run", "--robot", "two_wheel", "--condition", "all", "--seeds", "0-2",
              "--steps", "1500", "--no-progress"]
 
