@@ -70,13 +70,14 @@ lint: $(VENV)/.installed-test
 
 # The tests in two tiers (pyproject.toml's `slow` marker). make test first compiles every
 # kernel once into numba's cache (experiments/ops/warm.py: on a fresh clone the tests'
-# processes would each compile the same kernels at once), then runs every test on two
+# processes would each compile the same kernels at once; the boxhead is the tests' robot of
+# the one realisation no shipped robot has, joint_motors), then runs every test on two
 # workers (tests/conftest.py keeps the tests that start Ray or PostgreSQL on one), the 15
 # slowest listed at the end; make test-fast, the edit loop, runs the unit tier: the
 # equations, kernels, parsers and command-line refusals in process, no test that starts
 # processes, renders a video, runs a study or checks a golden run.
 test: lint $(VENV)/.installed-test
-	$(BIN)/python -m experiments.ops.warm
+	$(BIN)/python -m experiments.ops.warm tests/mounts/boxhead.toml
 	$(BIN)/python -m pytest -q -n 2 --dist loadgroup --durations=15
 
 test-fast: lint $(VENV)/.installed-test

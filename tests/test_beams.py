@@ -15,30 +15,11 @@ from helpers import ROOT, ebrl, ebrl_here
 from models import rooms
 from tasks import beams
 
-#: dm_control's soccer boxhead, mounted as the issue's newcomer did: the head on its own
-#: steering hinge, the ball rolling on its own; beams at {height} m above the head's centre.
-BOXHEAD = """file = "dm_control:locomotion/soccer/assets/boxhead/boxhead.xml"
-drive = "two_wheel"
-unit = 0.3                      # the walls (3 units) 0.9 m high; the head's centre 1.0 m
-base = "head_body"
-joints = "slides_z"
-drop = ["sensors", "cameras"]
-timestep = 0.005
-integrator = "implicitfast"
-time_scale = 4.0
-[bumper]
-shape = "sphere"
-radius = 0.45
-height = -0.65
-[beams]
-height = {height}
-[action]
-kind = "joint_motors"
-forward = "roll"
-turn = "steer"
-kp = 80.0
-kv = 30.0
-"""
+#: dm_control's soccer boxhead (tests/mounts/boxhead.toml, the mount `make test` warms),
+#: its beams at {height} m above the head's centre.
+BOXHEAD = (ROOT / "tests" / "mounts" / "boxhead.toml").read_text().replace(
+    "\nheight = -0.2\n", "\nheight = {height}\n")
+assert "{height}" in BOXHEAD
 
 
 def _boxhead(tmp_path, height):

@@ -324,12 +324,17 @@ def test_the_warm_up_reaches_every_realisation_and_learner():
     compiles what another is compiling; one realisation's runs in one process. joint_motors
     is no shipped file's: its tests mount their own."""
     from experiments.ops import warm
+    from helpers import ROOT
     from tasks.realisations import REALISATIONS
     from tasks.robots import resolve
     groups = warm.specs()
     assert all(len({resolve(s.robot).realisation for s, _ in group}) == 1 for group in groups)
     pairs = [pair for group in groups for pair in group]
     assert set(REALISATIONS) - {resolve(s.robot).realisation for s, _ in pairs} == {"joint_motors"}
+    boxhead = ROOT / "tests" / "mounts" / "boxhead.toml"  # the Makefile's warm-up gives it
+    assert [resolve(s.robot).realisation for s, _ in warm.specs([boxhead])[-1]] == [
+        "joint_motors", "joint_motors"]
+    assert str(boxhead.relative_to(ROOT)) in (ROOT / "Makefile").read_text()
     assert {s.agent for s, _ in pairs} == set(AGENTS)
     assert {fused for _, fused in pairs} == {True, False}
     # The agent and the loop compiled by one process (the first group's run) before any

@@ -1,6 +1,7 @@
 """Every compiled kernel into numba's on-disk cache, once, before many processes want it.
 
-`make test` runs this first (`python -m experiments.ops.warm`). On a fresh clone no
+`make test` runs this first (`python -m experiments.ops.warm [MOUNT.toml ...]`, with the
+mounts of the tests' own robots whose realisation no shipped robot has). On a fresh clone no
 kernel is cached: a cold run spends most of its time compiling (docs/speed.md, "Compiling,
 and what was not adopted"), and the test processes that start together (two pytest
 workers, the `ebrl` commands and pool workers they start) would each compile the same
@@ -28,15 +29,16 @@ STEPS = 30
 ENV_STEPS = 3
 
 
-def specs():
+def specs(files=()):
     """[(RunSpec, fused), ...] per realisation, the paper's two-wheel one first (it also
     compiles what every realisation shares: the agent and the loop), that reach every
-    kernel: each registered robot and shipped mount in both conditions in the compiled
-    loop; the paper robots also step by step and with the other learners."""
+    kernel: each registered robot, shipped mount and robot file in files in both
+    conditions in the compiled loop; the paper robots also step by step and with the other
+    learners."""
     from experiments.running import execution
     from tasks.robots import MOUNTS, ROBOTS, resolve
     groups = {}
-    for robot in [*ROBOTS, *MOUNTS]:
+    for robot in [*ROBOTS, *MOUNTS, *map(str, files)]:
         group = groups.setdefault(resolve(robot).realisation, [])
         for condition in ("random", "avoidance"):
             group.append((execution.RunSpec(robot, condition, 0, STEPS), True))
@@ -81,9 +83,10 @@ def jobs(groups):
         yield ("run", group), (("run", first[0][0].robot), ("env", robot))
 
 
-def main(workers=2):
+def main(files=(), workers=2):
+    """Warms every shipped robot's kernels and those of the robot files (mounts, .toml)."""
     start = time.perf_counter()
-    waiting = [(kind, what, after) for (kind, what), after in jobs(specs())]
+    waiting = [(kind, what, after) for (kind, what), after in jobs(specs(files))]
     done, made = set(), 0
     context = multiprocessing.get_context("spawn")
     with concurrent.futures.ProcessPoolExecutor(workers, mp_context=context) as pool:
@@ -108,4 +111,4 @@ def main(workers=2):
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(main(sys.argv[1:]))
