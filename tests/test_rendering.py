@@ -12,6 +12,7 @@ import tasks
 from ebrl.agent import DECIDERS
 from experiments.running import execution
 from experiments.outputs import overlays, rendering
+from helpers import ebrl_here
 from models import UNIT
 
 #: The slow tier (pyproject.toml's markers): videos rendered.
@@ -132,12 +133,12 @@ def test_compare_writes_one_video_with_both_halves_moving(tmp_path):
     import imageio.v3 as iio
     video = tmp_path / "compare.mp4"
     proc = subprocess.run([sys.executable, "-m", "experiments", "render", "--robot", "two_wheel",
-                           "--seed", "0", "--steps", "60", "--compare", "condition", "--out",
+                           "--seed", "0", "--steps", "30", "--compare", "condition", "--out",
                            str(video)], cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     assert "(random)" in proc.stdout and "(avoidance)" in proc.stdout
     frames = np.stack(list(iio.imiter(video)))
-    assert frames.shape == (60, H, 2 * W, 3)  # one frame per step, both halves
+    assert frames.shape == (30, H, 2 * W, 3)  # one frame per step, both halves
     left, right = frames[:, :, :W], frames[:, :, W:]
     for half in (left, right):
         assert np.abs(half[-1].astype(int) - half[0].astype(int)).mean() > 0.05
@@ -168,8 +169,7 @@ def test_compare_behaviour_puts_the_papers_rule_beside_a_genome(tmp_path):
     frames = np.stack(list(iio.imiter(video)))
     left, right = frames[:, :, :W], frames[:, :, W:]
     assert np.abs(left[-1].astype(int) - right[-1].astype(int)).mean() > 0.05  # they part
-    bad = subprocess.run(base + ["--out", str(tmp_path / "x.mp4")], cwd=ROOT,
-                         capture_output=True, text=True, timeout=300)
+    bad = ebrl_here(*base[3:], "--out", tmp_path / "x.mp4")  # refused before any work
     assert bad.returncode == 2 and "--compare behaviour needs --behaviour" in bad.stderr
     assert len(bad.stderr.strip().splitlines()) == 1 and not (tmp_path / "x.mp4").exists()
 

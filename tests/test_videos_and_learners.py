@@ -19,7 +19,7 @@ def test_rendered_video_has_moving_frames(tmp_path, robot, camera):
     import imageio.v3 as iio
     video = tmp_path / "run.mp4"
     proc = ebrl("render", "--robot", robot, "--condition", "avoidance", "--seed", "0",
-                "--steps", "60", "--camera", camera, "--out", video)
+                "--steps", "30", "--camera", camera, "--out", video)
     assert proc.stderr.strip() == ""
     frames = np.stack(list(iio.imiter(video)))
     assert frames.shape[0] >= 30 and frames.shape[1:] == (480, 640, 3)
