@@ -98,7 +98,8 @@ def test_the_docs_boxhead_is_the_one_tested_here():
     """docs/adding_a_robot.md's boxhead (beams see the room) is test_beams' at -0.2 m,
     which `ebrl check` passes (test_beams), but for its comments."""
     docs = _docs_block("boxhead.xml")
-    strip = lambda text: [line.split("#")[0].rstrip() for line in text.splitlines()]  # noqa: E731
+    strip = lambda text: [line.split("#")[0].rstrip() for line in text.splitlines()  # noqa: E731
+                          if line.split("#")[0].strip()]
     assert strip(docs) == strip(BOXHEAD)
 
 
