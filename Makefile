@@ -18,6 +18,9 @@ DEMO_OUT ?= demo_results
 UV_VERSION := 0.13.9
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
+
+# Its own target, so that a venv made before uv was used gets it too.
+$(BIN)/uv: $(BIN)/python
 	$(BIN)/python -m pip install -q "uv==$(UV_VERSION)"
 
 # The exact environment: requirements.lock (the base install) and requirements-test.lock
@@ -43,12 +46,12 @@ endif
 # it stands for both stamps: make test on a fresh clone installs once, not twice. It does
 # not compile every installed module to bytecode (make demo's base install does): the
 # test processes write the bytecode of what they import, once (docs/speed.md).
-$(VENV)/.installed: $(BIN)/python pyproject.toml requirements.lock
+$(VENV)/.installed: $(BIN)/uv pyproject.toml requirements.lock
 	$(INSTALL_BASE)
 	$(SELF)
 	touch $@
 
-$(VENV)/.installed-test: $(BIN)/python pyproject.toml requirements.lock requirements-test.lock
+$(VENV)/.installed-test: $(BIN)/uv pyproject.toml requirements.lock requirements-test.lock
 	$(INSTALL_TEST)
 	$(SELF)
 	touch $@ $(VENV)/.installed
@@ -57,7 +60,7 @@ $(VENV)/.installed-test: $(BIN)/python pyproject.toml requirements.lock requirem
 # from 3.11 on, the base lock the test lock's versions.
 UV_COMPILE = $(BIN)/uv pip compile pyproject.toml --universal --fork-strategy fewest \
 	--python-version 3.11 --generate-hashes --quiet
-lock: $(BIN)/python
+lock: $(BIN)/uv
 	$(UV_COMPILE) --extra test --extra ray -o requirements-test.lock
 	$(UV_COMPILE) -c requirements-test.lock -o requirements.lock
 
