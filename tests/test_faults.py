@@ -210,9 +210,9 @@ RAY_LOG = re.compile(r"^(\[\d{4}-\d\d-\d\d [\d:,]+ [A-Z] \d+ \d+\] \S+\.(cc|h):\
 
 
 def test_ray_records_a_raised_run_and_a_dead_worker_as_the_local_pool_does(clean, tmp_path):
-    """Without RAY_ADDRESS each command starts its own Ray (two CPUs) and stops it; the
-    test hooks reach its workers (the across-nodes test below joins a cluster). The rerun
-    makes the set the local pool's, bit for bit."""
+    """Without RAY_ADDRESS the command starts its own Ray (two CPUs) and stops it; the
+    test hooks reach its workers (the across-nodes test below joins a cluster). Its six
+    finished runs are the local pool's, bit for bit, and a rerun completes the set."""
     pytest.importorskip("ray")
     out = tmp_path / "results"
     raised, died = "two_wheel/avoidance/seed_001", "two_wheel/random/seed_002"
@@ -234,7 +234,9 @@ def test_ray_records_a_raised_run_and_a_dead_worker_as_the_local_pool_does(clean
     assert got[died]["status"] == "failed"
     assert got[died]["error"].startswith(f"WorkerDied: the Ray worker running {died} died")
     assert {k: v for k, v in arrays(clean).items() if k not in (raised, died)} == arrays(out)
-    proc = ebrl("run", *SET, "--backend", "ray", "--workers", "2", "--out", out, env=env())
+    # The rerun here on the local pool: Ray's runs and the pool's make one set (a whole set
+    # on Ray, bit for bit the pool's: the across-nodes test).
+    proc = here("run", *SET, "--workers", "2", "--out", out)
     assert proc.stdout.strip().startswith("2 runs made, 6 already on disk")
     assert summary(out) == summary(clean) and arrays(out) == arrays(clean)
 
