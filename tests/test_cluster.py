@@ -12,7 +12,7 @@ import time
 
 import pytest
 
-from helpers import ROOT, ebrl
+from helpers import ROOT, ebrl_here
 
 #: The slow tier (pyproject.toml's markers): PostgreSQL, Ray and study workers in processes.
 pytestmark = pytest.mark.slow
@@ -195,8 +195,8 @@ def test_no_password_in_any_output_of_a_study(postgres_url, tmp_path):
     for text in [stdout, stderr, stored] + files:
         assert SECRET not in (text.decode(errors="replace") if isinstance(text, bytes) else text)
     # A server that cannot be reached: one line, the password hidden.
-    bad = ebrl("fit", "--storage", f"postgresql://ebrl:{SECRET}@127.0.0.1:1/db", "--out",
-               tmp_path / "bad", "--no-progress")
+    bad = ebrl_here("fit", "--storage", f"postgresql://ebrl:{SECRET}@127.0.0.1:1/db", "--out",
+                    tmp_path / "bad", "--no-progress")
     assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1, bad.stderr
     assert "cannot open the study storage postgresql+psycopg://ebrl:***@127.0.0.1:1/db" \
         in bad.stderr and SECRET not in bad.stderr + bad.stdout
