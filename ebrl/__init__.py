@@ -4,12 +4,15 @@ work compiled by numba (ebrl.kernels). ebrl never imports the simulator.
 Paper equation -> the function that computes it -> the tests that check it against a
 case computed by hand (in tests/test_ebrl_equations.py unless named otherwise):
 
-eq 1      W += alpha (S - W)          kernels.eq1 (also agent.eq1), applied by kernels.recall
+eq 1      W += alpha (S - W)          kernels.eq1 (also agent.eq1), applied by kernels.advance
           test_eq1_recall_weight_moves_alpha_of_the_way, test_recall_eq1_by_hand
-2.2       recall table: the N_r       kernels.recall
-          largest weights             test_recall_eq1_by_hand; test_ebrl_memory.py:
-                                      test_recall_selection_is_the_stable_top_n_r
-eq 2      S = 1 - sqrt(sum ... / 2n)  kernels.similarities (the agent's); ebrl.similarity
+2.2       recall table: the N_r       kernels.recall_since (kernels.fill); the act's
+          largest weights             kernels.recall_pruned, the same table bit for bit
+                                      test_recall_eq1_by_hand; test_ebrl_memory.py:
+                                      test_recall_selection_is_the_stable_top_n_r;
+                                      test_recall_pruned.py
+eq 2      S = 1 - sqrt(sum ... / 2n)  kernels.similarities (kernels.radicands, then
+                                      kernels.similarity_of's sums); ebrl.similarity
                                       (the float64 reference, as printed)
           test_eq2_by_hand[reference], test_eq2_by_hand[compiled],
           test_compiled_similarity_equals_float64_reference,

@@ -65,30 +65,73 @@ def eq5(weights, utilities):
 
 
 @njit(cache=True)
-def similarities(x, inputs, size, variance, group_of, group_size, group_weight, out):
-    """eq 2-4: out[m] = S(M_m, x) for every stored element m < size.
-
-    eq 4 for each group j of components: S'_j = 1 - sqrt(1/(2 n_j) sum_{i in j}
-    (x_i - m_i)^2 / V_i); eq 3: S = sum_j w_j S'_j, with the weights w_j already
-    divided by their sum. With one group (weight 1) this is eq 2. Each sum runs over
-    the components in index order, as `ebrl.similarity` does.
+def radicands(x, inputs, size, variance, group_of, group_size, groups):
+    """eq 4's radicands for every stored element m < size: out[j, m] = 1/(2 n_j) sum_{i in
+    j} (x_i - m_i)^2 / V_i, the sum over group j's components in index order.
 
     Computed as sum_i (x_i - m_i)^2 c_i with c_i = 1 / (2 n_j V_i) taken once per act:
-    per element and component a multiply instead of two divisions, and one square root
-    per element and group (protocol 5; docs/speed.md). This rounds differently from
-    the formula as written (`ebrl.similarity`) in the last bits: within 1e-12 of it
-    (tests/test_ebrl_equations.py).
-    """
-    groups = group_weight.shape[0]
+    per element and component a multiply instead of two divisions (protocol 5;
+    docs/speed.md). This rounds differently from the formula as written
+    (`ebrl.similarity`) in the last bits: within 1e-12 of it
+    (tests/test_ebrl_equations.py). Each element's sum still adds the components one by
+    one in index order; up to four consecutive components of a group are added in one
+    pass over the elements, so that each element's partial sum is read and written once
+    per four components, not once per component (the same sums, bit for bit)."""
     radicand = np.zeros((groups, size))
-    for i in range(x.shape[0]):
+    n, i = x.shape[0], 0
+    while i < n:  # up to four components of one group in one pass over the elements
         j = group_of[i]
-        acc, row, xi, c = radicand[j], inputs[i], x[i], 1.0 / (2.0 * group_size[j] * variance[i])
-        for m in range(size):
-            d = xi - row[m]
-            acc[m] += d * d * c
+        acc, twice = radicand[j], 2.0 * group_size[j]
+        if i + 3 < n and group_of[i + 1] == j and group_of[i + 2] == j and group_of[i + 3] == j:
+            r0, r1, r2, r3 = inputs[i], inputs[i + 1], inputs[i + 2], inputs[i + 3]
+            x0, x1, x2, x3 = x[i], x[i + 1], x[i + 2], x[i + 3]
+            c0, c1 = 1.0 / (twice * variance[i]), 1.0 / (twice * variance[i + 1])
+            c2, c3 = 1.0 / (twice * variance[i + 2]), 1.0 / (twice * variance[i + 3])
+            for m in range(size):
+                d0, d1, d2, d3 = x0 - r0[m], x1 - r1[m], x2 - r2[m], x3 - r3[m]
+                a = acc[m] + d0 * d0 * c0
+                a = a + d1 * d1 * c1
+                a = a + d2 * d2 * c2
+                acc[m] = a + d3 * d3 * c3
+            i += 4
+        elif i + 1 < n and group_of[i + 1] == j:
+            r0, r1, x0, x1 = inputs[i], inputs[i + 1], x[i], x[i + 1]
+            c0, c1 = 1.0 / (twice * variance[i]), 1.0 / (twice * variance[i + 1])
+            for m in range(size):
+                d0, d1 = x0 - r0[m], x1 - r1[m]
+                a = acc[m] + d0 * d0 * c0
+                acc[m] = a + d1 * d1 * c1
+            i += 2
+        else:
+            r0, x0, c0 = inputs[i], x[i], 1.0 / (twice * variance[i])
+            for m in range(size):
+                d0 = x0 - r0[m]
+                acc[m] += d0 * d0 * c0
+            i += 1
+    return radicand
+
+
+@njit(cache=True)
+def similarity_of(radicand, m, group_weight):
+    """eq 3-4 for element m from its radicands: S = sum_j w_j S'_j, S'_j = 1 -
+    sqrt(radicand[j, m]), the weights already divided by their sum, summed in group order
+    from 0.0. With one group (weight 1) this is eq 2. (similarities computes the same
+    sums group by group over every element.)"""
+    total = 0.0
+    for j in range(group_weight.shape[0]):
+        total += group_weight[j] * (1.0 - np.sqrt(radicand[j, m]))
+    return total
+
+
+@njit(cache=True)
+def similarities(x, inputs, size, variance, group_of, group_size, group_weight, out):
+    """eq 2-4: out[m] = S(M_m, x) for every stored element m < size: radicands, then
+    eq 4's square roots and eq 3's weighted sum for each element (similarity_of's sums,
+    group by group over the elements, which vectorises)."""
+    radicand = radicands(x, inputs, size, variance, group_of, group_size,
+                         group_weight.shape[0])
     out[:size] = 0.0
-    for j in range(groups):
+    for j in range(group_weight.shape[0]):
         acc, w = radicand[j], group_weight[j]
         for m in range(size):
             out[m] += w * (1.0 - np.sqrt(acc[m]))
@@ -101,45 +144,165 @@ def recall(sim, size, nxt, table, table_w, alpha):
 
 
 @njit(cache=True)
-def recall_since(sim, size, nxt, table, table_w, alpha, time, since):
-    """The recall table (2.2) for the new input, whose similarities are sim[:size].
-
-    eq 1: each entry moves along its forward link (an entry at the end of its episode
-    drops out) and its weight becomes W + alpha (S - W) with S the similarity of the
-    element it reaches. Every stored element is a candidate with its similarity S; an
-    element reached by an entry keeps the larger of the two. The N_r = len(table)
-    candidates of largest weight form the new table, best first, equal weights to the
-    lower element. sim is overwritten with the candidates' weights.
-
-    An element whose time stamp is `since` or later is no candidate, nor reached by an
-    entry (recall_candidates "past": since = the current trial's first step;
-    NO_EXCLUSION: none is excluded, and `time` is not read).
-    """
+def advance(sim, nxt, table, table_w, alpha, time, since):
+    """eq 1 for the recall table's entries, in table order: each moves along its forward
+    link (an entry at the end of its episode drops out), and the element it reaches,
+    unless its time stamp is `since` or later, keeps the larger of its similarity
+    sim[ahead] and W + alpha (S - W)."""
     exclude = since != NO_EXCLUSION
     for e in range(table.shape[0]):
         if table[e] >= 0:
             ahead = nxt[table[e]]
             if ahead >= 0 and not (exclude and time[ahead] >= since):
                 sim[ahead] = max(sim[ahead], eq1(table_w[e], sim[ahead], alpha))
+
+
+@njit(cache=True)
+def fill(table, table_w, candidates, count, weight):
+    """The recall table from scratch: the N_r = len(table) of candidates[:count]
+    (ascending elements) of largest weight[m], best first, equal weights to the lower
+    element (each goes after every entry of equal or larger weight; a full table takes
+    one only above its lowest weight)."""
     table[:] = -1
-    k, count = table.shape[0], 0
+    k, filled = table.shape[0], 0
     lowest = -np.inf  # once the table is full: the weight a candidate must exceed
-    for m in range(size):
-        if exclude and time[m] >= since:
-            continue
-        w = sim[m]
-        if count == k:
+    for c in range(count):
+        m = candidates[c]
+        w = weight[m]
+        if filled == k:
             if not w > lowest:
                 continue
         else:
-            count += 1
-        e = count - 1  # insert after every entry of equal or larger weight
+            filled += 1
+        e = filled - 1
         while e > 0 and table_w[e - 1] < w:
             table[e], table_w[e] = table[e - 1], table_w[e - 1]
             e -= 1
         table[e], table_w[e] = m, w
-        if count == k:
+        if filled == k:
             lowest = table_w[k - 1]
+
+
+@njit(cache=True)
+def recall_since(sim, size, nxt, table, table_w, alpha, time, since):
+    """The recall table (2.2) for the new input, whose similarities are sim[:size].
+
+    eq 1: each entry moves along its forward link (advance). Every stored element is a
+    candidate with its similarity S; an element reached by an entry keeps the larger of
+    the two. The N_r = len(table) candidates of largest weight form the new table, best
+    first, equal weights to the lower element (fill). sim is overwritten with the
+    candidates' weights.
+
+    An element whose time stamp is `since` or later is no candidate, nor reached by an
+    entry (recall_candidates "past": since = the current trial's first step;
+    NO_EXCLUSION: none is excluded, and `time` is not read).
+    """
+    exclude = since != NO_EXCLUSION
+    advance(sim, nxt, table, table_w, alpha, time, since)
+    candidates = np.empty(size, np.int64)
+    count = 0
+    for m in range(size):
+        if not (exclude and time[m] >= since):
+            candidates[count] = m
+            count += 1
+    fill(table, table_w, candidates, count, sim)
+
+
+#: recall_pruned's margin, relative: an element is left out only where its similarity's
+#: bound is below the reached elements' weights by this much, far more than the bound's
+#: rounding (about 1e-16), so that no element that could enter the table is left out.
+PRUNE_MARGIN = 1e-9
+
+
+@njit(cache=True)
+def prune_cut(floor, group_weight):
+    """(g, cut): an element whose group-g radicand exceeds cut has a similarity below
+    floor, g being the group of largest weight; cut is inf (no element left out) where no
+    such bound holds (a negative weight, a floor too close to the largest similarity).
+
+    S = sum_j w_j (1 - sqrt(r_j)) <= w_g (1 - sqrt(r_g)) + sum_{j != g} w_j, each
+    1 - sqrt(r_j) being at most 1 and w_j >= 0; it is below floor - margin when sqrt(r_g)
+    > 1 - c, c = (floor - margin - rest) / w_g, that is when r_g > (1 - c)^2 (with the
+    margin, PRUNE_MARGIN, on both)."""
+    g, rest = 0, 0.0
+    for j in range(group_weight.shape[0]):
+        if group_weight[j] < 0.0:
+            return 0, np.inf
+        if group_weight[j] > group_weight[g]:
+            g = j
+    for j in range(group_weight.shape[0]):
+        if j != g:
+            rest += group_weight[j]
+    if not group_weight[g] > 0.0:
+        return 0, np.inf
+    c = (floor - PRUNE_MARGIN * (1.0 + abs(floor)) - rest) / group_weight[g]
+    base = 1.0 - c
+    if not base > 0.0:
+        return 0, np.inf
+    return g, base * base * (1.0 + PRUNE_MARGIN)
+
+
+@njit(cache=True)
+def recall_pruned(radicand, group_weight, size, nxt, table, table_w, alpha, time, since,
+                  sim):
+    """recall_since on the similarities of `radicand` (similarity_of), bit for bit, with
+    the square roots taken only where an element may enter the table.
+
+    The elements the entries reach get their similarity, then eq 1 (advance). When the
+    entries reach N_r elements, the new table's lowest weight is at least the least of
+    theirs (it holds the N_r largest weights of a set that includes them), so an element
+    whose bound (prune_cut) is below that cannot enter: it is no candidate. The others,
+    found in one pass over eq 4's radicands, and the reached ones are the candidates, in
+    element order, as recall_since's (fill). sim holds their weights afterwards; the rest
+    of sim is left as it was."""
+    exclude = since != NO_EXCLUSION
+    k = table.shape[0]
+    reached = np.empty(k + 1, np.int64)  # the elements reached by an entry, ascending
+    n_reached = 0
+    for e in range(k):
+        if table[e] >= 0:
+            ahead = nxt[table[e]]
+            if ahead < 0 or (exclude and time[ahead] >= since):
+                continue
+            q = n_reached
+            while q > 0 and reached[q - 1] > ahead:
+                q -= 1
+            if q > 0 and reached[q - 1] == ahead:
+                continue
+            for r in range(n_reached, q, -1):
+                reached[r] = reached[r - 1]
+            reached[q] = ahead
+            n_reached += 1
+            sim[ahead] = similarity_of(radicand, ahead, group_weight)
+    advance(sim, nxt, table, table_w, alpha, time, since)
+    g, cut = 0, np.inf
+    if n_reached == k:
+        floor = np.inf
+        for q in range(k):
+            floor = min(floor, sim[reached[q]])
+        g, cut = prune_cut(floor, group_weight)
+    # The elements whose bound reaches the floor (branch-free: one store each)
+    passed, bounded, n_passed = np.empty(size + 1, np.int64), radicand[g], 0
+    for m in range(size):
+        passed[n_passed] = m
+        n_passed += bounded[m] <= cut
+    passed[n_passed] = reached[n_reached] = size  # the ends, past every element
+    # merged with the reached elements, in element order
+    candidates, count, a, b = np.empty(n_passed + n_reached, np.int64), 0, 0, 0
+    while passed[a] < size or reached[b] < size:
+        if reached[b] <= passed[a]:
+            m = reached[b]
+            a += passed[a] == m
+            b += 1
+        else:
+            m = passed[a]
+            a += 1
+            if exclude and time[m] >= since:
+                continue
+            sim[m] = similarity_of(radicand, m, group_weight)
+        candidates[count] = m
+        count += 1
+    fill(table, table_w, candidates, count, sim)
 
 
 @njit(cache=True)
@@ -160,7 +323,8 @@ def policy(table, table_w, utility, threshold):
 def act(x, size, inputs, variance, group_of, group_size, group_weight, sim, nxt,
         table, table_w, utility, alpha, threshold, time, since):
     """One act: eq 2-4 against the memory, the recall table (eq 1; candidates stored
-    before `since` only, recall_since), eq 5's choice.
+    before `since` only; recall_pruned: recall_since's table, each similarity taken only
+    where it may enter), eq 5's choice.
 
     Returns the element whose action eq 5 picks, -1 for none, or INVALID (with nothing
     changed) when x is not finite or its square overflows (the variance sums need x^2).
@@ -170,8 +334,9 @@ def act(x, size, inputs, variance, group_of, group_size, group_weight, sim, nxt,
         square += x[i] * x[i]
     if not np.isfinite(square):
         return INVALID
-    similarities(x, inputs, size, variance, group_of, group_size, group_weight, sim)
-    recall_since(sim, size, nxt, table, table_w, alpha, time, since)
+    radicand = radicands(x, inputs, size, variance, group_of, group_size,
+                         group_weight.shape[0])
+    recall_pruned(radicand, group_weight, size, nxt, table, table_w, alpha, time, since, sim)
     return policy(table, table_w, utility, threshold)
 
 
