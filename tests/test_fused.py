@@ -136,6 +136,6 @@ def test_bench_times_the_fused_loop_beside_the_step_loop():
     from experiments.ops import bench
     row = bench.measure("two_wheel", 200, blocks=3)  # the median leaves out the first (loading)
     for key in ("raw_physics", "env_step", "agent", "whole_loop", "fused_loop",
-                "reference_pass"):
+                "reference_pass", "agent_over_reference"):
         assert np.isfinite(row[key]) and row[key] > 0, key
     assert row["fused_loop"] < row["whole_loop"] * 2
