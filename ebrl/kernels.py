@@ -218,7 +218,7 @@ PRUNE_MARGIN = 1e-9
 def prune_cut(floor, group_weight):
     """(g, cut): an element whose group-g radicand exceeds cut has a similarity below
     floor, g being the group of largest weight; cut is inf (no element left out) where no
-    such bound holds (a negative weight, a floor too close to the largest similarity).
+    such bound holds (a weight not above 0, a floor too close to the largest similarity).
 
     S = sum_j w_j (1 - sqrt(r_j)) <= w_g (1 - sqrt(r_g)) + sum_{j != g} w_j, each
     1 - sqrt(r_j) being at most 1 and w_j >= 0; it is below floor - margin when sqrt(r_g)
@@ -226,15 +226,13 @@ def prune_cut(floor, group_weight):
     margin, PRUNE_MARGIN, on both)."""
     g, rest = 0, 0.0
     for j in range(group_weight.shape[0]):
-        if group_weight[j] < 0.0:
+        if not group_weight[j] > 0.0:  # a weight 0 times an infinite radicand is nan
             return 0, np.inf
         if group_weight[j] > group_weight[g]:
             g = j
     for j in range(group_weight.shape[0]):
         if j != g:
             rest += group_weight[j]
-    if not group_weight[g] > 0.0:
-        return 0, np.inf
     c = (floor - PRUNE_MARGIN * (1.0 + abs(floor)) - rest) / group_weight[g]
     base = 1.0 - c
     if not base > 0.0:
@@ -251,7 +249,9 @@ def recall_pruned(radicand, group_weight, size, nxt, table, table_w, alpha, time
     The elements the entries reach get their similarity, then eq 1 (advance). When the
     entries reach N_r elements, the new table's lowest weight is at least the least of
     theirs (it holds the N_r largest weights of a set that includes them), so an element
-    whose bound (prune_cut) is below that cannot enter: it is no candidate. The others,
+    whose bound (prune_cut) is below that cannot enter: it is no candidate (with every
+    group weight above 0 and the reached weights finite, no similarity is nan, so the
+    table is the stable top N_r that recall_since's scan makes). The others,
     found in one pass over eq 4's radicands, and the reached ones are the candidates, in
     element order, as recall_since's (fill). sim holds their weights afterwards; the rest
     of sim is left as it was."""
@@ -276,11 +276,14 @@ def recall_pruned(radicand, group_weight, size, nxt, table, table_w, alpha, time
             sim[ahead] = similarity_of(radicand, ahead, group_weight)
     advance(sim, nxt, table, table_w, alpha, time, since)
     g, cut = 0, np.inf
-    if n_reached == k:
-        floor = np.inf
+    if n_reached == k:  # a floor only from finite weights (eq 1 from -inf gives nan)
+        floor, finite = np.inf, True
         for q in range(k):
-            floor = min(floor, sim[reached[q]])
-        g, cut = prune_cut(floor, group_weight)
+            w = sim[reached[q]]
+            finite = finite and -np.inf < w < np.inf
+            floor = min(floor, w)
+        if finite:
+            g, cut = prune_cut(floor, group_weight)
     # The elements whose bound reaches the floor (branch-free: one store each)
     passed, bounded, n_passed = np.empty(size + 1, np.int64), radicand[g], 0
     for m in range(size):

@@ -3,7 +3,8 @@ four components a pass against one component a pass, and recall_pruned (square r
 only where an element may enter the table) against similarities + recall_since on the
 same memory. Random memories with many equal inputs (ties at every weight), entries
 that reach the same element or drop out, candidates cut by time (recall_candidates
-"past"), one to three groups, contiguous or interleaved."""
+"past"), one to three groups, contiguous or interleaved, and inputs so far apart that
+similarities are -inf (or nan, with a group of weight 0)."""
 import numpy as np
 import pytest
 
@@ -75,10 +76,16 @@ def test_the_radicands_are_one_component_a_pass_bit_for_bit(n, size, groups, int
 @pytest.mark.parametrize("n,size,groups,interleaved", CASES)
 def test_the_pruned_recall_is_recall_since_bit_for_bit(n, size, groups, interleaved):
     rng = np.random.default_rng(n * 100 + size + groups + interleaved)
+    kinds = set()  # the edge similarities met
     for case in range(60):
         mem = _memory(rng, n, size, size + 5, groups, interleaved)
         since = SINCE_ALL if case % 3 else int(rng.integers(0, 2 * size))
         alpha = float(rng.random())
+        if case % 5 == 4:  # inputs far apart: squares overflow, similarities -inf
+            mem["x"] *= 1e155
+            mem["inputs"][:, ::2] *= -1e155
+        if case % 7 == 6 and groups > 1:  # a group of weight 0: 0 * -inf is nan
+            mem["group_weight"][-1] = 0.0
         radicand = kernels.radicands(mem["x"], mem["inputs"], size, mem["variance"],
                                      mem["group_of"], mem["group_size"], groups)
         sim = np.zeros(size + 5)
@@ -92,6 +99,9 @@ def test_the_pruned_recall_is_recall_since_bit_for_bit(n, size, groups, interlea
                               got_w, alpha, mem["time"], since, np.zeros(size + 5))
         assert got_t.tolist() == want_t.tolist(), case
         assert got_w[got_t >= 0].tobytes() == want_w[want_t >= 0].tobytes(), case
+        kinds |= {"-inf"} if np.isneginf(sim[:size]).any() else set()
+        kinds |= {"nan"} if np.isnan(sim[:size]).any() else set()
+    assert kinds == ({"-inf", "nan"} if groups > 1 else {"-inf"})  # the edges were met
 
 
 def test_the_bound_leaves_out_only_elements_below_the_floor():
@@ -108,3 +118,4 @@ def test_the_bound_leaves_out_only_elements_below_the_floor():
     assert 0.0 < kernels.prune_cut(1.0, weight)[1] < 1e-15
     assert kernels.prune_cut(1.5, weight)[1] == np.inf  # past 1 the bound cuts nothing
     assert kernels.prune_cut(0.5, np.array([1.2, -0.2]))[1] == np.inf  # a negative weight
+    assert kernels.prune_cut(0.5, np.array([1.0, 0.0]))[1] == np.inf  # a weight 0
