@@ -241,8 +241,21 @@ def prune_cut(floor, group_weight):
 
 
 @njit(cache=True)
+def scales_finite(variance, group_of, group_size):
+    """Whether every c_i = 1 / (2 n_j V_i) of eq 4 is finite and above 0: then no
+    radicand is nan (that needs 0 * inf, a c_i of 0 or inf), and recall_pruned may leave
+    elements out (a variance floor so small that c_i overflows, or variances that
+    overflow, make it take every element)."""
+    for i in range(variance.shape[0]):
+        c = 1.0 / (2.0 * group_size[group_of[i]] * variance[i])
+        if not 0.0 < c < np.inf:
+            return False
+    return True
+
+
+@njit(cache=True)
 def recall_pruned(radicand, group_weight, size, nxt, table, table_w, alpha, time, since,
-                  sim):
+                  sim, prune):
     """recall_since on the similarities of `radicand` (similarity_of), bit for bit, with
     the square roots taken only where an element may enter the table.
 
@@ -254,7 +267,8 @@ def recall_pruned(radicand, group_weight, size, nxt, table, table_w, alpha, time
     table is the stable top N_r that recall_since's scan makes). The others,
     found in one pass over eq 4's radicands, and the reached ones are the candidates, in
     element order, as recall_since's (fill). sim holds their weights afterwards; the rest
-    of sim is left as it was."""
+    of sim is left as it was. prune False (scales_finite's answer: a radicand may be
+    nan) takes every element, as recall_since does."""
     exclude = since != NO_EXCLUSION
     k = table.shape[0]
     reached = np.empty(k + 1, np.int64)  # the elements reached by an entry, ascending
@@ -276,7 +290,7 @@ def recall_pruned(radicand, group_weight, size, nxt, table, table_w, alpha, time
             sim[ahead] = similarity_of(radicand, ahead, group_weight)
     advance(sim, nxt, table, table_w, alpha, time, since)
     g, cut = 0, np.inf
-    if n_reached == k:  # a floor only from finite weights (eq 1 from -inf gives nan)
+    if prune and n_reached == k:  # a floor only from finite weights (eq 1 from -inf: nan)
         floor, finite = np.inf, True
         for q in range(k):
             w = sim[reached[q]]
@@ -288,7 +302,7 @@ def recall_pruned(radicand, group_weight, size, nxt, table, table_w, alpha, time
     passed, bounded, n_passed = np.empty(size + 1, np.int64), radicand[g], 0
     for m in range(size):
         passed[n_passed] = m
-        n_passed += bounded[m] <= cut
+        n_passed += not bounded[m] > cut
     passed[n_passed] = reached[n_reached] = size  # the ends, past every element
     # merged with the reached elements, in element order
     candidates, count, a, b = np.empty(n_passed + n_reached, np.int64), 0, 0, 0
@@ -339,7 +353,8 @@ def act(x, size, inputs, variance, group_of, group_size, group_weight, sim, nxt,
         return INVALID
     radicand = radicands(x, inputs, size, variance, group_of, group_size,
                          group_weight.shape[0])
-    recall_pruned(radicand, group_weight, size, nxt, table, table_w, alpha, time, since, sim)
+    recall_pruned(radicand, group_weight, size, nxt, table, table_w, alpha, time, since, sim,
+                  scales_finite(variance, group_of, group_size))
     return policy(table, table_w, utility, threshold)
 
 

@@ -3,8 +3,9 @@ four components a pass against one component a pass, and recall_pruned (square r
 only where an element may enter the table) against similarities + recall_since on the
 same memory. Random memories with many equal inputs (ties at every weight), entries
 that reach the same element or drop out, candidates cut by time (recall_candidates
-"past"), one to three groups, contiguous or interleaved, and inputs so far apart that
-similarities are -inf (or nan, with a group of weight 0)."""
+"past"), one to three groups, contiguous or interleaved, inputs so far apart that
+similarities are -inf (or nan, with a group of weight 0), and a variance so small that a
+radicand is nan."""
 import numpy as np
 import pytest
 
@@ -86,6 +87,8 @@ def test_the_pruned_recall_is_recall_since_bit_for_bit(n, size, groups, interlea
             mem["inputs"][:, ::2] *= -1e155
         if case % 7 == 6 and groups > 1:  # a group of weight 0: 0 * -inf is nan
             mem["group_weight"][-1] = 0.0
+        if case % 11 == 10:  # a variance so small that 1 / (2 n V) is inf: 0 * inf is nan
+            mem["variance"][0] = 1e-320
         radicand = kernels.radicands(mem["x"], mem["inputs"], size, mem["variance"],
                                      mem["group_of"], mem["group_size"], groups)
         sim = np.zeros(size + 5)
@@ -95,13 +98,16 @@ def test_the_pruned_recall_is_recall_since_bit_for_bit(n, size, groups, interlea
         kernels.recall_since(sim, size, mem["nxt"], want_t, want_w, alpha, mem["time"],
                              since)
         got_t, got_w = mem["table"].copy(), mem["table_w"].copy()
+        prune = kernels.scales_finite(mem["variance"], mem["group_of"], mem["group_size"])
+        assert prune == (case % 11 != 10)
         kernels.recall_pruned(radicand, mem["group_weight"], size, mem["nxt"], got_t,
-                              got_w, alpha, mem["time"], since, np.zeros(size + 5))
+                              got_w, alpha, mem["time"], since, np.zeros(size + 5), prune)
         assert got_t.tolist() == want_t.tolist(), case
         assert got_w[got_t >= 0].tobytes() == want_w[want_t >= 0].tobytes(), case
         kinds |= {"-inf"} if np.isneginf(sim[:size]).any() else set()
         kinds |= {"nan"} if np.isnan(sim[:size]).any() else set()
-    assert kinds == ({"-inf", "nan"} if groups > 1 else {"-inf"})  # the edges were met
+        kinds |= {"nan radicand"} if np.isnan(radicand).any() else set()
+    assert kinds == {"-inf", "nan", "nan radicand"}  # the edges were met
 
 
 def test_the_bound_leaves_out_only_elements_below_the_floor():
