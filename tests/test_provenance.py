@@ -63,7 +63,7 @@ def test_report_refuses_to_pool_other_parameters_in_one_line(made, tmp_path):
     out = tmp_path / "results"
     shutil.copytree(made, out)
     before = (out / "summary.json").read_bytes()
-    proc = ebrl("run", *SHORT, "--seeds", "2", "--set", "policy_threshold=0.1", "--out", out,
+    proc = here("run", *SHORT, "--seeds", "2", "--set", "policy_threshold=0.1", "--out", out,
                 check=False)
     assert proc.returncode == 2
     lines = proc.stderr.strip().splitlines()

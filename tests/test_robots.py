@@ -11,7 +11,7 @@ import pytest
 import tasks
 from experiments.running import execution, runner
 from experiments.checks import robotcheck
-from helpers import ROOT, ebrl, ebrl_here
+from helpers import ROOT, ebrl_here
 from tasks import navigation
 from tasks.protocols import PROTOCOL_VERSION
 
@@ -20,7 +20,7 @@ MODELS = ROOT / "models"
 
 @pytest.mark.slow
 def test_every_command_takes_its_robots_from_the_registry():
-    listed = ebrl("robots")
+    listed = ebrl_here("robots")
     assert listed.returncode == 0
     table, readings, mounted = listed.stdout.split("\n\n")
     assert [line.split()[0] for line in mounted.splitlines()[1:]] == list(tasks.MOUNTS)

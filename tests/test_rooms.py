@@ -11,7 +11,7 @@ import models
 import tasks
 from experiments.outputs import optimal, rendering
 from experiments.running import aggregate, execution, results, runner
-from helpers import ebrl, ebrl_here
+from helpers import ebrl_here
 from models import UNIT, rooms
 
 
@@ -171,7 +171,7 @@ def test_the_optimal_path_follows_the_map():
 
 @pytest.mark.slow
 def test_rooms_lists_the_shipped_maps():
-    proc = ebrl("rooms", check=True)
+    proc = ebrl_here("rooms", check=True)
     for name in rooms.MAPS:
         assert f"\n{name} " in proc.stdout
     assert "random:WxH:SEED" in proc.stdout

@@ -180,10 +180,12 @@ def test_a_small_tune_of_the_boxhead_writes_its_values_beside_the_mount(tmp_path
     data = tomllib.loads(out.read_text())
     found = f"time_scale {data['time_scale']!r}, kp {data['action']['kp']}, kv {data['action']['kv']}"
     assert f", {found}, worst " in lines[1], (found, lines[1])
-    again = ebrl("check", "--robot", out, "--actions", "20", "--accuracy-actions", "10")
+    # the check on the written file, and the same tune again, in this process: the same
+    # measures and the same file as the user's process gave
+    again = ebrl_here("check", "--robot", out, "--actions", "20", "--accuracy-actions", "10")
     assert again.returncode == proc.returncode, again.stdout + again.stderr
     assert _measures(again.stdout.splitlines()) == _measures(reported)
 
-    same = ebrl("check", "--tune", "--robot", _boxhead(tmp_path / "b"), *SMALL)
+    same = ebrl_here("check", "--tune", "--robot", _boxhead(tmp_path / "b"), *SMALL)
     assert same.returncode == proc.returncode, same.stdout + same.stderr
     assert (tmp_path / "b" / "boxhead.tuned.toml").read_bytes() == out.read_bytes()
