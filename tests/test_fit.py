@@ -7,7 +7,7 @@ import pytest
 
 from experiments.studies import fit, study
 from experiments import paper
-from helpers import ebrl, ebrl_here
+from helpers import ebrl_here
 import tasks.robots
 
 
@@ -222,9 +222,9 @@ def test_a_first_trial_study_runs_and_validates(tmp_path):
     validation on 10 other seeds, through the real command line."""
     import optuna
     out = tmp_path / "fit1"
-    proc = ebrl("fit", "--stage", "first-trial", "--robot", "two_wheel", "--seeds", "0-63",
-                "--steps", "200", "--trials", "1", "--workers", "1", "--no-progress",
-                "--validate", "100-109", "--out", out)
+    proc = ebrl_here("fit", "--stage", "first-trial", "--robot", "two_wheel", "--seeds",
+                     "0-63", "--steps", "200", "--trials", "1", "--workers", "1",
+                     "--no-progress", "--validate", "100-109", "--out", out)
     assert proc.returncode == 0, proc.stderr
     s = optuna.load_study(study_name="first_trial_two_wheel",
                           storage=study.storage_url(None, out))

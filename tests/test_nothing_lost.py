@@ -25,7 +25,7 @@ from ebrl.baselines import mfec, qtable
 from experiments.checks import validate
 from experiments.running import results, schema
 from experiments.studies import multiverse
-from helpers import ROOT, ebrl, ebrl_here
+from helpers import ROOT, ebrl_here
 
 EXAMPLES = int(os.environ.get("EBRL_PROPERTY_EXAMPLES", "200"))
 MANY = settings(max_examples=EXAMPLES, deadline=None, database=None,
@@ -328,8 +328,8 @@ def test_bench_refuses_a_robot_as_run_does(tmp_path, args, said):
 
 @pytest.mark.slow
 def test_bench_times_a_robot_file_with_its_drive(tmp_path):
-    proc = ebrl("bench", "--robot", ROOT / "models" / "two_wheel.xml", "--drive", "two_wheel",
-                "--steps", "5", "--blocks", "1", cwd=tmp_path)
+    proc = ebrl_here("bench", "--robot", ROOT / "models" / "two_wheel.xml", "--drive",
+                     "two_wheel", "--steps", "5", "--blocks", "1", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     row = proc.stdout.strip().splitlines()[-1].split()
     assert row[0].endswith("two_wheel.xml") and all(
