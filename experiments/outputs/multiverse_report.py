@@ -420,8 +420,8 @@ def markdown(ctx):
              "(dotted); the literal protocol a star, the current a diamond (under the plain "
              "definition of steps per trial); below, the factors at their alternative level "
              "and the definition at budget over goals (dark).", ""]
-    for key, path in ctx.figures.items():
-        lines += [f"![{key}]({path})", ""]
+    # one paragraph: the curves side by side where the page is wide enough
+    lines += [f"![{key}]({path})" for key, path in ctx.figures.items()] + [""]
     lines += ["## Cost", ""] + cost_text(ctx.n_runs, ctx.seconds, ctx.timing, ctx.bench,
                                          ctx.steps_by_robot) + [""]
     if ctx.failed:
