@@ -72,6 +72,11 @@ def _step_env(robot):
     return 0
 
 
+def key(kind, what):
+    """A job's name among the jobs: (kind, robot), a run's robot its group's first."""
+    return kind, what if kind == "env" else what[0][0].robot
+
+
 def jobs(groups):
     """The jobs in the order they may start: ("run", group) for the first group; ("env",
     robot) and, after it and the first group's run, ("run", group) for each other group."""
@@ -80,7 +85,7 @@ def jobs(groups):
     for group in others:
         robot = group[0][0].robot
         yield ("env", robot), ()
-        yield ("run", group), (("run", first[0][0].robot), ("env", robot))
+        yield ("run", group), (key("run", first), key("env", robot))
 
 
 def main(files=(), workers=2):
@@ -98,8 +103,7 @@ def main(files=(), workers=2):
                     break
                 kind, what, _ = job
                 waiting.remove(job)
-                key = (kind, what if kind == "env" else what[0][0].robot)
-                running[pool.submit(_run if kind == "run" else _step_env, what)] = key
+                running[pool.submit(_run if kind == "run" else _step_env, what)] = key(kind, what)
             finished, _ = concurrent.futures.wait(
                 running, return_when=concurrent.futures.FIRST_COMPLETED)
             for future in finished:
