@@ -7,10 +7,10 @@ case computed by hand (in tests/test_ebrl_equations.py unless named otherwise):
 eq 1      W += alpha (S - W)          kernels.eq1 (also agent.eq1), applied by kernels.advance
           test_eq1_recall_weight_moves_alpha_of_the_way, test_recall_eq1_by_hand
 2.2       recall table: the N_r       kernels.recall_since (kernels.fill); the act's
-          largest weights             kernels.recall_pruned, the same table bit for bit
+          largest weights             acting.recall_bounded, the same table bit for bit
                                       test_recall_eq1_by_hand; test_ebrl_memory.py:
                                       test_recall_selection_is_the_stable_top_n_r;
-                                      test_recall_pruned.py
+                                      test_recall_bounded.py
 eq 2      S = 1 - sqrt(sum ... / 2n)  kernels.similarities (kernels.radicands, then
                                       kernels.similarity_of's sums); ebrl.similarity
                                       (the float64 reference, as printed)
@@ -45,7 +45,7 @@ eq 9-10   avoidance by accelerating   intrinsic.eq9, intrinsic.eq10, via
           point of two families       JSON; `ebrl run --behaviour`, `ebrl evolve`)
                                       tests/test_evolve.py
 
-kernels.act chains eq 1-5 for one act and steps.learn_step stores the step and applies eq
+acting.act chains eq 1-5 for one act and steps.learn_step stores the step and applies eq
 6-7 and the time discount; ebrl.Agent holds the memory as one record (steps.AgentRecord)
 and calls steps.act_memory and steps.learn_step once each per step (steps.end_trial at a
 trial's end).
@@ -84,7 +84,7 @@ eq7_walk (eq 7)      whole / discounted / cut  kernels.eq7
                      test_eq7_walks_by_hand
 forgetting_link      join / cut                kernels.forget
   (2.1)              test_forgetting_joins_or_cuts_the_episode
-recall_candidates    all / past                kernels.recall_since (via kernels.act)
+recall_candidates    all / past                kernels.recall_since (via acting.act)
   (2.2)              test_recall_candidates_past_only_by_hand
 exploration (2.3)    fallback / random         steps.act_memory
                      test_exploration_reading_by_hand

@@ -29,7 +29,7 @@ reset(), if it has one, when a trial ends.
 The work of each step is done by the compiled per-step kernels of ebrl.steps
 (act_memory, learn_step, end_trial; act_step and end_trial below add a compiled
 fallback) on the agent's record (steps.AgentRecord), which holds the arrays of this
-class's memory; act_memory calls ebrl.kernels.act, which chains eq 1-5, and learn_step
+class's memory; act_memory calls ebrl.acting.act, which chains eq 1-5, and learn_step
 the kernels of eq 6, eq 7, forgetting and the time discount. The agent's random stream
 is one exploration draw per act, then the fallback's draws when the fallback acts (or
 the random action's, for exploration "random").
@@ -109,7 +109,9 @@ class Agent:
         #: the very ones the compiled record holds.
         self.memory = types.SimpleNamespace(
             group_of=group_of.astype(np.int64), group_size=group_size,
-            group_weight=group_weight, inputs=np.zeros((n, M)), sums=np.zeros((2, n)),
+            group_weight=group_weight, inputs=np.zeros((n, M)),
+            inputs32=np.zeros((n, M), dtype=np.float32), input_bound=np.zeros(n),
+            sums=np.zeros((2, n)),
             variance=np.full(n, float(c.variance_floor)), sim=np.zeros(M),
             actions=np.zeros((M, self.action_dim)), utility=np.zeros(M), rel=np.zeros(M),
             time=np.zeros(M, dtype=np.int64), nxt=np.full(M, -1, dtype=np.int64),

@@ -11,6 +11,8 @@ same order, so this changes no value.)
 The memory, as the kernels see it (M = memory_size, n = obs_dim):
     inputs[i, m]   component i of element m's input (one row per component, so that
                    eq 2-4 run along rows, over the elements)
+    inputs32[i, m] the same rounded to single precision, and input_bound[i] at least
+                   every stored |inputs[i, m]|: only for the act's bound (ebrl.acting)
     actions[m]     element m's action
     utility[m]     U_m (eq 5, eq 6);   rel[m]: R_m (eq 7, time discount, forgetting)
     time[m]        the step at which m was stored (eq 6's exponent)
@@ -65,6 +67,16 @@ def eq5(weights, utilities):
 
 
 @njit(cache=True)
+def scales(variance, group_of, group_size):
+    """eq 4's c_i = 1 / (2 n_j V_i) for each component i of group j: a radicand is
+    sum_i (x_i - m_i)^2 c_i."""
+    c = np.empty(variance.shape[0])
+    for i in range(variance.shape[0]):
+        c[i] = 1.0 / (2.0 * group_size[group_of[i]] * variance[i])
+    return c
+
+
+@njit(cache=True)
 def radicands(x, inputs, size, variance, group_of, group_size, groups):
     """eq 4's radicands for every stored element m < size: out[j, m] = 1/(2 n_j) sum_{i in
     j} (x_i - m_i)^2 / V_i, the sum over group j's components in index order.
@@ -77,16 +89,22 @@ def radicands(x, inputs, size, variance, group_of, group_size, groups):
     one in index order; up to four consecutive components of a group are added in one
     pass over the elements, so that each element's partial sum is read and written once
     per four components, not once per component (the same sums, bit for bit)."""
+    return radicands_scaled(x, inputs, size, scales(variance, group_of, group_size), group_of,
+                            groups)
+
+
+@njit(cache=True)
+def radicands_scaled(x, inputs, size, c, group_of, groups):
+    """radicands with eq 4's c_i given (scales)."""
     radicand = np.zeros((groups, size))
     n, i = x.shape[0], 0
     while i < n:  # up to four components of one group in one pass over the elements
         j = group_of[i]
-        acc, twice = radicand[j], 2.0 * group_size[j]
+        acc = radicand[j]
         if i + 3 < n and group_of[i + 1] == j and group_of[i + 2] == j and group_of[i + 3] == j:
             r0, r1, r2, r3 = inputs[i], inputs[i + 1], inputs[i + 2], inputs[i + 3]
             x0, x1, x2, x3 = x[i], x[i + 1], x[i + 2], x[i + 3]
-            c0, c1 = 1.0 / (twice * variance[i]), 1.0 / (twice * variance[i + 1])
-            c2, c3 = 1.0 / (twice * variance[i + 2]), 1.0 / (twice * variance[i + 3])
+            c0, c1, c2, c3 = c[i], c[i + 1], c[i + 2], c[i + 3]
             for m in range(size):
                 d0, d1, d2, d3 = x0 - r0[m], x1 - r1[m], x2 - r2[m], x3 - r3[m]
                 a = acc[m] + d0 * d0 * c0
@@ -96,14 +114,14 @@ def radicands(x, inputs, size, variance, group_of, group_size, groups):
             i += 4
         elif i + 1 < n and group_of[i + 1] == j:
             r0, r1, x0, x1 = inputs[i], inputs[i + 1], x[i], x[i + 1]
-            c0, c1 = 1.0 / (twice * variance[i]), 1.0 / (twice * variance[i + 1])
+            c0, c1 = c[i], c[i + 1]
             for m in range(size):
                 d0, d1 = x0 - r0[m], x1 - r1[m]
                 a = acc[m] + d0 * d0 * c0
                 acc[m] = a + d1 * d1 * c1
             i += 2
         else:
-            r0, x0, c0 = inputs[i], x[i], 1.0 / (twice * variance[i])
+            r0, x0, c0 = inputs[i], x[i], c[i]
             for m in range(size):
                 d0 = x0 - r0[m]
                 acc[m] += d0 * d0 * c0
@@ -208,120 +226,6 @@ def recall_since(sim, size, nxt, table, table_w, alpha, time, since):
     fill(table, table_w, candidates, count, sim)
 
 
-#: recall_pruned's margin, relative: an element is left out only where its similarity's
-#: bound is below the reached elements' weights by this much, far more than the bound's
-#: rounding (about 1e-16), so that no element that could enter the table is left out.
-PRUNE_MARGIN = 1e-9
-
-
-@njit(cache=True)
-def prune_cut(floor, group_weight):
-    """(g, cut): an element whose group-g radicand exceeds cut has a similarity below
-    floor, g being the group of largest weight; cut is inf (no element left out) where no
-    such bound holds (a weight not above 0, a floor too close to the largest similarity).
-
-    S = sum_j w_j (1 - sqrt(r_j)) <= w_g (1 - sqrt(r_g)) + sum_{j != g} w_j, each
-    1 - sqrt(r_j) being at most 1 and w_j >= 0; it is below floor - margin when sqrt(r_g)
-    > 1 - c, c = (floor - margin - rest) / w_g, that is when r_g > (1 - c)^2 (with the
-    margin, PRUNE_MARGIN, on both)."""
-    g, rest = 0, 0.0
-    for j in range(group_weight.shape[0]):
-        if not group_weight[j] > 0.0:  # a weight 0 times an infinite radicand is nan
-            return 0, np.inf
-        if group_weight[j] > group_weight[g]:
-            g = j
-    for j in range(group_weight.shape[0]):
-        if j != g:
-            rest += group_weight[j]
-    c = (floor - PRUNE_MARGIN * (1.0 + abs(floor)) - rest) / group_weight[g]
-    base = 1.0 - c
-    if not base > 0.0:
-        return 0, np.inf
-    return g, base * base * (1.0 + PRUNE_MARGIN)
-
-
-@njit(cache=True)
-def scales_finite(variance, group_of, group_size):
-    """Whether every c_i = 1 / (2 n_j V_i) of eq 4 is finite and above 0: then no
-    radicand is nan (that needs 0 * inf, a c_i of 0 or inf), and recall_pruned may leave
-    elements out (a variance floor so small that c_i overflows, or variances that
-    overflow, make it take every element)."""
-    for i in range(variance.shape[0]):
-        c = 1.0 / (2.0 * group_size[group_of[i]] * variance[i])
-        if not 0.0 < c < np.inf:
-            return False
-    return True
-
-
-@njit(cache=True)
-def recall_pruned(radicand, group_weight, size, nxt, table, table_w, alpha, time, since,
-                  sim, prune):
-    """recall_since on the similarities of `radicand` (similarity_of), bit for bit, with
-    the square roots taken only where an element may enter the table.
-
-    The elements the entries reach get their similarity, then eq 1 (advance). When the
-    entries reach N_r elements, the new table's lowest weight is at least the least of
-    theirs (it holds the N_r largest weights of a set that includes them), so an element
-    whose bound (prune_cut) is below that cannot enter: it is no candidate (with every
-    group weight above 0 and the reached weights finite, no similarity is nan, so the
-    table is the stable top N_r that recall_since's scan makes). The others,
-    found in one pass over eq 4's radicands, and the reached ones are the candidates, in
-    element order, as recall_since's (fill). sim holds their weights afterwards; the rest
-    of sim is left as it was. prune False (scales_finite's answer: a radicand may be
-    nan) takes every element, as recall_since does."""
-    exclude = since != NO_EXCLUSION
-    k = table.shape[0]
-    reached = np.empty(k + 1, np.int64)  # the elements reached by an entry, ascending
-    n_reached = 0
-    for e in range(k):
-        if table[e] >= 0:
-            ahead = nxt[table[e]]
-            if ahead < 0 or (exclude and time[ahead] >= since):
-                continue
-            q = n_reached
-            while q > 0 and reached[q - 1] > ahead:
-                q -= 1
-            if q > 0 and reached[q - 1] == ahead:
-                continue
-            for r in range(n_reached, q, -1):
-                reached[r] = reached[r - 1]
-            reached[q] = ahead
-            n_reached += 1
-            sim[ahead] = similarity_of(radicand, ahead, group_weight)
-    advance(sim, nxt, table, table_w, alpha, time, since)
-    g, cut = 0, np.inf
-    if prune and n_reached == k:  # a floor only from finite weights (eq 1 from -inf: nan)
-        floor, finite = np.inf, True
-        for q in range(k):
-            w = sim[reached[q]]
-            finite = finite and -np.inf < w < np.inf
-            floor = min(floor, w)
-        if finite:
-            g, cut = prune_cut(floor, group_weight)
-    # The elements whose bound reaches the floor (branch-free: one store each)
-    passed, bounded, n_passed = np.empty(size + 1, np.int64), radicand[g], 0
-    for m in range(size):
-        passed[n_passed] = m
-        n_passed += not bounded[m] > cut
-    passed[n_passed] = reached[n_reached] = size  # the ends, past every element
-    # merged with the reached elements, in element order
-    candidates, count, a, b = np.empty(n_passed + n_reached, np.int64), 0, 0, 0
-    while passed[a] < size or reached[b] < size:
-        if reached[b] <= passed[a]:
-            m = reached[b]
-            a += passed[a] == m
-            b += 1
-        else:
-            m = passed[a]
-            a += 1
-            if exclude and time[m] >= since:
-                continue
-            sim[m] = similarity_of(radicand, m, group_weight)
-        candidates[count] = m
-        count += 1
-    fill(table, table_w, candidates, count, sim)
-
-
 @njit(cache=True)
 def policy(table, table_w, utility, threshold):
     """eq 5: the element of the entry maximising min(W_i, U_i), the first in table
@@ -334,28 +238,6 @@ def policy(table, table_w, utility, threshold):
             if measure > best_measure:
                 best, best_measure = table[e], measure
     return best if best_measure > threshold else -1
-
-
-@njit(cache=True)
-def act(x, size, inputs, variance, group_of, group_size, group_weight, sim, nxt,
-        table, table_w, utility, alpha, threshold, time, since):
-    """One act: eq 2-4 against the memory, the recall table (eq 1; candidates stored
-    before `since` only; recall_pruned: recall_since's table, each similarity taken only
-    where it may enter), eq 5's choice.
-
-    Returns the element whose action eq 5 picks, -1 for none, or INVALID (with nothing
-    changed) when x is not finite or its square overflows (the variance sums need x^2).
-    """
-    square = 0.0
-    for i in range(x.shape[0]):
-        square += x[i] * x[i]
-    if not np.isfinite(square):
-        return INVALID
-    radicand = radicands(x, inputs, size, variance, group_of, group_size,
-                         group_weight.shape[0])
-    recall_pruned(radicand, group_weight, size, nxt, table, table_w, alpha, time, since, sim,
-                  scales_finite(variance, group_of, group_size))
-    return policy(table, table_w, utility, threshold)
 
 
 @njit(cache=True)

@@ -9,8 +9,9 @@ from numba import njit
 from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
 from compiled import records
 from compiled.clip import clip_unit
+from ebrl.acting import act
 from ebrl.kernels import EQ7_DECIDED_ONLY, EQ7_REWARD, EQ7_SURPRISE_RATE, EXPLORATION, \
-    EXPLORED, FALLBACK, FORGET_OLDEST, INVALID, MEMORY, NO_EXCLUSION, act, eq5, eq6, eq7, \
+    EXPLORED, FALLBACK, FORGET_OLDEST, INVALID, MEMORY, NO_EXCLUSION, eq5, eq6, eq7, \
     eq7_decided, forget, least_reliable, oldest, time_discount, update_variance
 
 
@@ -24,9 +25,11 @@ AGENT_FIELDS = (
     "eq7_signal", "eq7_walk", "cut_links", "past_only", "explore_random", "random_sd",
     # eq 3's modalities
     "group_of", "group_size", "group_weight",
-    # the memory (2.1), the variance sums (eq 2), the act's scratch, the recall table (2.2)
-    "inputs", "sums", "variance", "sim", "actions", "utility", "rel", "time", "nxt", "prev",
-    "decided", "table", "table_w",
+    # the memory (2.1) with its inputs rounded to single precision and each component's
+    # largest |input| (the act's bound, kernels.recall_bounded), the variance sums (eq 2),
+    # the act's scratch, the recall table (2.2)
+    "inputs", "inputs32", "input_bound", "sums", "variance", "sim", "actions", "utility",
+    "rel", "time", "nxt", "prev", "decided", "table", "table_w",
     # the last act's input and action, whether learn has yet to store them, the reward
     # its memory decision expected (eq7_signal), the current trial's first step
     "obs", "action", "pending", "expected", "trial_start",
@@ -103,9 +106,9 @@ def act_memory(s, x):
     nothing changed, for an x that is not finite or whose square overflows. With
     recall_candidates "past" the candidates are the elements of earlier trials."""
     since = s.trial_start if s.past_only else NO_EXCLUSION
-    element = act(x, s.size, s.inputs, s.variance, s.group_of, s.group_size, s.group_weight,
-                  s.sim, s.nxt, s.table, s.table_w, s.utility, s.alpha, s.threshold, s.time,
-                  since)
+    element = act(x, s.size, s.inputs, s.inputs32, s.input_bound, s.variance, s.group_of,
+                  s.group_size, s.group_weight, s.sim, s.nxt, s.table, s.table_w, s.utility,
+                  s.alpha, s.threshold, s.time, since)
     if element == INVALID:
         return INVALID
     s.obs[:] = x
@@ -161,8 +164,11 @@ def learn_step(s, reward):
     else:
         slot = size
         size += 1
+    inputs32, input_bound = s.inputs32, s.input_bound
     for i in range(x.shape[0]):
         inputs[i, slot] = x[i]
+        inputs32[i, slot] = x[i]  # rounded to nearest
+        input_bound[i] = max(input_bound[i], abs(x[i]))  # never lowered: a bound
         sums[0, i] += x[i]
         sums[1, i] += x[i] * x[i]
     update_variance(sums, size, s.floor, s.variance)
