@@ -15,9 +15,9 @@ No two processes compile the same kernel at once (tasks.realisations: the robots
 realisation share its kernels; every realisation shares the agent and the loop). One
 process runs the paper's two-wheel realisation first, which compiles the agent and the loop
 (about half of the whole); meanwhile the other steps each other realisation's environment
-(`tasks.load`, a few steps), which compiles its kernels and not the agent's. A
-realisation's runs start once both are done, and compile only what joins its kernels to
-the loop.
+(`tasks.load`, a few steps), which compiles its kernels and not the agent's, and the
+first process free takes the environments still waiting before any run. A realisation's
+runs start once both are done, and compile only what joins its kernels to the loop.
 """
 import concurrent.futures
 import multiprocessing
@@ -78,14 +78,16 @@ def key(kind, what):
 
 
 def jobs(groups):
-    """The jobs in the order they may start: ("run", group) for the first group; ("env",
-    robot) and, after it and the first group's run, ("run", group) for each other group."""
+    """The jobs in the order they may start: ("run", group) for the first group, ("env",
+    robot) for each other group, then each other group's ("run", group) after its env and
+    the first group's run. The environments, the longest chain, come first: a process
+    free after the first run takes the environments still waiting before any run."""
     first, *others = groups
     yield ("run", first), ()
     for group in others:
-        robot = group[0][0].robot
-        yield ("env", robot), ()
-        yield ("run", group), (key("run", first), key("env", robot))
+        yield ("env", group[0][0].robot), ()
+    for group in others:
+        yield ("run", group), (key("run", first), key("env", group[0][0].robot))
 
 
 def main(files=(), workers=2):
