@@ -67,6 +67,9 @@ def scales_finite(c):
 #: single-precision pass may leave elements out: with every value below it no difference
 #: overflows in single precision (its largest is about 3.4e38), so the bound holds.
 BOUNDED_LIMIT = 1e30
+#: The most components the bounded group may have: the single-precision sum's rounding,
+#: (n + 7) 2^-24 of it at most, stays below single_cut's relative 1e-5.
+BOUNDED_COMPONENTS = 100
 
 
 @njit(cache=True)
@@ -74,28 +77,32 @@ def single_cut(cut, g, c, x, input_bound, group_of):
     """The single-precision cut that keeps every element whose group-g radicand is at
     most `cut`: an element whose single-precision radicand (group_radicands) exceeds it
     has an exact radicand above cut. inf (no element left out) where no such cut holds
-    (values past BOUNDED_LIMIT, a cut past 1e37).
+    (values past BOUNDED_LIMIT, more than BOUNDED_COMPONENTS components, a cut past 1e37).
 
     With the weighted norm |v| = sqrt(sum_{i in g} c_i v_i^2), the exact sqrt(r) = |x -
     m| >= |x' - m'| - |x - x'| - |m - m'| (x', m' rounded to single precision: each
     within 2^-24 of its value, so the last two at most 2^-24 (|x| + |B|), B the inputs'
-    bound, input_bound). The single-precision sum of at most n positive terms, each of a
-    subtraction, a product and a square, is within (n + 4) 2^-24 of |x' - m'|^2, far
-    below the relative 1e-5 taken, and numbers so small that they are not normal in
-    single precision within the absolute 1e-20. So an element above the returned cut
-    has |x' - m'| > sqrt(cut) + |x - x'| + |m - m'|, hence r > cut."""
+    bound, input_bound). The single-precision sum of n positive terms, each of a
+    subtraction, a product by sqrt(c_i) rounded and a square, is within (n + 7) 2^-24 of
+    |x' - m'|^2, below the relative 1e-5 taken, and numbers so small that they are not
+    normal in single precision within the absolute 1e-20; a sum that overflows is above
+    any cut returned. So an element above the returned cut has |x' - m'| > sqrt(cut) +
+    |x - x'| + |m - m'|, hence r > cut."""
     if not cut < np.inf:
         return np.float32(np.inf)
-    sx, sb, sc = 0.0, 0.0, 0.0
+    sx, sb, sc, count = 0.0, 0.0, 0.0, 0
     for i in range(x.shape[0]):
         if group_of[i] != g:
             continue
+        count += 1
         if not (c[i] <= BOUNDED_LIMIT and abs(x[i]) <= BOUNDED_LIMIT
                 and input_bound[i] <= BOUNDED_LIMIT):
             return np.float32(np.inf)
         sx += c[i] * x[i] * x[i]
         sb += c[i] * input_bound[i] * input_bound[i]
         sc += c[i]
+    if count > BOUNDED_COMPONENTS:
+        return np.float32(np.inf)
     eps = 2.0 ** -23 * (np.sqrt(sx) + np.sqrt(sb)) + 1e-20 * (1.0 + np.sqrt(sc))
     root = np.sqrt(cut) + eps
     bound = ((1.0 + 1e-5) * root * root + 1e-20) * (1.0 + 1e-6)  # rounds up to single

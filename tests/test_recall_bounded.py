@@ -186,6 +186,9 @@ def test_the_single_precision_cut_keeps_every_element_at_the_cut():
     assert acting.single_cut(0.5, 0, np.full(3, 2e30), np.ones(3), np.ones(3), zero) == np.inf
     assert acting.single_cut(2e37, 0, c, np.ones(3), np.ones(3), zero) == np.inf
     assert 0.5 < acting.single_cut(0.5, 0, c, np.ones(3), np.ones(3), zero) < 0.5001
+    many = acting.BOUNDED_COMPONENTS + 1  # the sum's rounding past the relative 1e-5
+    assert acting.single_cut(0.5, 0, np.ones(many), np.ones(many), np.ones(many),
+                             np.zeros(many, np.int64)) == np.inf
 
 
 def test_passing_takes_the_elements_not_above_the_cut_nan_included_in_order():
