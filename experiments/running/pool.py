@@ -135,13 +135,18 @@ def worker_processes(pool):
 
 
 def _stop(pool):
-    """Terminates the pool's worker processes and shuts it down without waiting for
-    the runs in flight (lost: their folders hold no run.json, so a rerun redoes them)."""
+    """Terminates the pool's worker processes, then shuts it down, the runs in flight
+    lost (their folders hold no run.json, so a rerun redoes them). The shutdown waits for
+    the pool's own thread, which the dead workers end at once: left running (shutdown
+    without waiting), it could close its wake-up pipe while the interpreter's exit
+    writes to it, and Python 3.11's concurrent.futures then printed an ignored
+    "Bad file descriptor" traceback after the command's one line (seen once under load,
+    in tests/test_bad_inputs.py; CPython's gh-132969 is of the same kind)."""
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, signal.SIG_IGN)  # a second Ctrl-C while stopping
     processes = list(worker_processes(pool).values())
     for p in processes:
         p.terminate()
-    pool.shutdown(wait=False, cancel_futures=True)
     for p in processes:
         p.join(5)
+    pool.shutdown(wait=True, cancel_futures=True)
