@@ -26,7 +26,7 @@ AGENT_FIELDS = (
     # eq 3's modalities
     "group_of", "group_size", "group_weight",
     # the memory (2.1) with its inputs rounded to single precision and each component's
-    # largest |input| (the act's bound, kernels.recall_bounded), the variance sums (eq 2),
+    # largest |input| (the act's bound, acting.recall_bounded), the variance sums (eq 2),
     # the act's scratch, the recall table (2.2)
     "inputs", "inputs32", "input_bound", "sums", "variance", "sim", "actions", "utility",
     "rel", "time", "nxt", "prev", "decided", "table", "table_w",
@@ -152,7 +152,7 @@ def learn_step(s, reward):
     # the record's fields read once, as kernels take them (arrays hoisted out of the loops)
     size, tail, referred = s.size, s.tail, s.referred
     x, inputs, sums, rel, time, nxt, prev = s.obs, s.inputs, s.sums, s.rel, s.time, s.nxt, s.prev
-    utility, decided = s.utility, s.decided
+    utility, decided, inputs32, input_bound = s.utility, s.decided, s.inputs32, s.input_bound
     if size == rel.shape[0]:
         if s.forgetting == FORGET_OLDEST:
             slot = oldest(time, size)
@@ -164,7 +164,6 @@ def learn_step(s, reward):
     else:
         slot = size
         size += 1
-    inputs32, input_bound = s.inputs32, s.input_bound
     for i in range(x.shape[0]):
         inputs[i, slot] = x[i]
         inputs32[i, slot] = x[i]  # rounded to nearest
