@@ -17,6 +17,11 @@ and built by name, ``Stream.build(buffer=..., cursor=0, has_gauss=0, gauss=0.0)`
 missing or unknown name is a TypeError naming it. Fields are read by name in compiled
 code (``st.cursor``) and, from Python, through small compiled getters.
 
+A function called with records step after step from Python (ebrl.Agent's act and learn)
+is called through `direct`: numba's dispatcher types every argument at every call, and a
+record's type is found in Python (about 0.75 us a record, where an array costs 0.1;
+docs/speed.md), while the compiled version's own entry point only unboxes it.
+
 Why each record states its own constructor, a line in its own module: numba's own
 (StructRefProxy's ``__new__``) compiles anew in every process (about 0.3 s a record, in
 every worker), while an ``@njit(cache=True)`` function is loaded from the on-disk cache;
@@ -26,6 +31,7 @@ match.
 """
 import sys
 
+import numba
 from numba import types
 from numba.experimental import structref
 
@@ -84,3 +90,13 @@ def record(*fields):
         return cls
 
     return define
+
+
+def direct(function, *args):
+    """`function` (an ``@njit`` dispatcher) compiled for the types of `args`, as a callable
+    that skips numba's per-call typing of its arguments; the version is loaded from the
+    cache or compiled, as a first call would. The caller must pass arguments of exactly
+    these types from then on: nothing checks them again (an array of another dtype,
+    layout or dimension would be read as one of these). numba's public
+    ``Dispatcher.compile`` returns that version's entry point."""
+    return function.compile(tuple(numba.typeof(a) for a in args))

@@ -45,6 +45,7 @@ import numpy as np
 from numba import njit
 
 from compiled import cache  # noqa: F401  numba's cache keyed on every file a kernel compiles in
+from compiled.records import direct
 from ebrl import intrinsic, kernels, steps
 from ebrl.config import Config, reading_code
 from ebrl.kernels import DECIDERS, EXPLORATION, FALLBACK, INVALID, eq1, eq5
@@ -147,6 +148,15 @@ class Agent:
         self.compiled = (type(fallback) in (intrinsic.RandomWalk, intrinsic.Intrinsic)
                           and fallback.compiled)
         self._action = self.memory.action
+        # The per-step kernels without numba's per-call typing of the records (about
+        # 0.75 us a record; compiled.records.direct): act's x and given are always fresh
+        # 1-D float64 arrays of act's own making, and learn's reward a float.
+        probe = np.zeros(n)
+        if self.compiled:
+            self._act_step = direct(act_step, self.record, self.fallback_record, probe, probe)
+        else:
+            self._act_memory = direct(steps.act_memory, self.record, probe)
+        self._learn_step = direct(steps.learn_step, self.record, 0.0)
 
     # -- read-outs -----------------------------------------------------------------
     def _counter(name, doc):
@@ -211,11 +221,15 @@ class Agent:
         x = np.array(obs, dtype=np.float64)
         if x.shape != (self.obs_dim,):
             raise ValueError(f"observation must have shape ({self.obs_dim},), got {x.shape}")
-        given = x if ranges is None else np.ascontiguousarray(ranges, dtype=np.float64)
+        given = x
+        if ranges is not None:
+            given = np.array(ranges, dtype=np.float64)
+            if given.ndim != 1:
+                raise ValueError(f"ranges must be 1-D, got shape {given.shape}")
         if self.compiled:  # eq 2-4, eq 1, eq 5, the exploration draw, the fallback
-            code = act_step(self.record, self.fallback_record, x, given)
+            code = self._act_step(self.record, self.fallback_record, x, given)
         else:  # the same, with a Python fallback
-            code = steps.act_memory(self.record, x)
+            code = self._act_memory(self.record, x)
             if code == FALLBACK:
                 self._action[:] = np.array(self.fallback(given, self.rng),
                                            dtype=np.float64).reshape(self.action_dim)
@@ -231,7 +245,7 @@ class Agent:
         if not math.isfinite(reward):
             raise ValueError("reward must be finite")
         # Store (forgetting one element when full), eq 6, eq 7, time discount.
-        if not steps.learn_step(self.record, reward):
+        if not self._learn_step(self.record, reward):
             raise ValueError("learn() needs an act() first")
         if last:
             self.end_trial()

@@ -105,6 +105,33 @@ def _run(seed, steps=3000):
     return np.array(actions), ag
 
 
+def test_act_takes_any_array_like_input_as_float64_and_refuses_ranges_not_1d():
+    """act converts its inputs itself (its kernel is called without numba's typing,
+    compiled.records.direct): ints, lists, strided and read-only arrays act as their
+    float64 copies; ranges of two dimensions are one ValueError, nothing changed."""
+    def agent():
+        return ebrl.Agent(ebrl.Config(memory_size=64), 10, 2,
+                          intrinsic.fallback_for("eq9-10", "avoidance"), seed=5)
+    rng = np.random.default_rng(0)
+    codes = rng.integers(0, 256, size=(200, 20))  # int64, every other column taken below
+    plain, odd = agent(), agent()
+    for step, row in enumerate(codes):
+        x = row[::2] / 255.0  # a strided view
+        x.flags.writeable = False
+        a = plain.act(np.ascontiguousarray(x), ranges=np.array(x[:8], dtype=np.float64))
+        b = odd.act(list(x), ranges=row[:16:2] / 255.0)
+        assert np.array_equal(a, b), step
+        for ag in (plain, odd):
+            ag.learn(1.0 if step % 50 == 49 else 0.0, step % 50 == 49)
+    assert plain.memory_decisions == odd.memory_decisions > 0
+    before = odd.steps
+    with pytest.raises(ValueError, match=r"ranges must be 1-D, got shape \(2, 4\)"):
+        odd.act(codes[0, :10] / 255.0, ranges=np.zeros((2, 4)))
+    with pytest.raises(ValueError, match="learn\\(\\) needs an act\\(\\) first"):
+        odd.learn(0.0)  # the refused act left nothing pending
+    assert odd.steps == before
+
+
 def test_same_seed_same_state_bit_for_bit():
     (a1, ag1), (a2, ag2) = _run(3), _run(3)
     assert np.array_equal(a1, a2)

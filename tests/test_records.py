@@ -51,3 +51,24 @@ def _swap(p):
 def test_compiled_code_reads_and_writes_the_fields_by_name():
     p = _Pair.build(y=5.0, x=2.0)
     assert _swap(p) == 3.0 and _swap(p) == -3.0
+
+
+@njit
+def _scaled_swap(p, scale, out):
+    p.x, p.y = p.y, p.x
+    out[:] = scale * (p.x - p.y)
+    return p.x
+
+
+def test_direct_is_the_version_the_dispatcher_runs_for_those_types():
+    p, q = _Pair.build(x=2.0, y=5.0), _Pair.build(x=2.0, y=5.0)
+    call = records.direct(_scaled_swap, p, 0.0, np.zeros(2))
+    assert len(_scaled_swap.signatures) == 1  # compiled once, for the probes' types
+    by_direct, by_dispatcher, got = np.zeros(2), np.zeros(2), []
+    for scale in (1.5, -2.0, 0.25):
+        got.append(call(p, scale, by_direct))
+        assert got[-1] == _scaled_swap(q, scale, by_dispatcher)
+        assert np.array_equal(by_direct, by_dispatcher)
+        assert by_direct[0] == scale * (got[-1] - (7.0 - got[-1]))  # x - y, by hand
+    assert got == [5.0, 2.0, 5.0]  # each call swapped the record's own fields
+    assert len(_scaled_swap.signatures) == 1  # the dispatcher found the same version
