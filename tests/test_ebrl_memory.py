@@ -102,6 +102,48 @@ def test_forgetting_takes_the_first_of_equal_reliabilities():
     assert kernels.least_reliable(rel, 1) == 0
 
 
+def _first_least(rel, size):
+    """Forgetting's choice as the plain scan makes it (2.1, the first on ties)."""
+    found = 0
+    for m in range(1, size):
+        if rel[m] < rel[found]:
+            found = m
+    return found
+
+
+def test_least_reliable_by_blocks_is_the_plain_scan_at_every_edge():
+    """least_reliable takes the least value per block of integer keys: the same element
+    as the plain scan on memories of ties, of -0.0 beside 0.0, of infinities, subnormals
+    and NaNs of either sign (rel[0] one of them too), at sizes across the blocks' edges."""
+    rng = np.random.default_rng(11)
+    special = np.array([0.5, 0.25, -0.125, -0.0, 0.0, 1.0, np.inf, -np.inf, 5e-324, -5e-324])
+    negative_nan = -np.abs(np.nan)  # a NaN with its sign bit set
+    assert np.signbit(negative_nan) and np.isnan(negative_nan)
+    block = kernels.LEAST_BLOCK
+    sizes = [1, 2, 2 * block - 1, 2 * block, 2 * block + 1, 3 * block, 4096]
+    for trial in range(3000):
+        size = sizes[trial % len(sizes)] if trial % 2 else int(rng.integers(1, 8 * block))
+        rel = rng.choice(special, size + 3) if trial % 3 else rng.random(size + 3)
+        if trial % 4 == 0:
+            rel[rng.integers(0, size)] = np.nan
+        if trial % 9 == 0:
+            rel[rng.integers(0, size)] = negative_nan
+        if trial % 13 == 0:
+            rel[0] = np.nan
+        if trial % 5 == 0:  # the least at a block's end, then at its start
+            rel[:] = 0.5
+            rel[min(size - 1, block - 1 + block * int(rng.integers(0, 4)))] = 0.25
+        if trial % 10 in (3, 6):  # zeros of both signs, either first
+            rel[:] = 0.5
+            first, later = sorted(rng.choice(size, 2, replace=False)) if size > 1 else (0, 0)
+            rel[first], rel[later] = (0.0, -0.0) if trial % 10 == 3 else (-0.0, 0.0)
+        rel[size:] = -1.0  # past size: never the answer
+        assert kernels.least_reliable(rel, size) == _first_least(rel, size), (trial, size)
+    keys = [kernels.ordered_key(np.array([v]).view(np.int64)[0]) for v in
+            (-np.inf, -1.0, -5e-324, -0.0, 0.0, 5e-324, 1.0, np.inf)]
+    assert keys == sorted(keys) and len(set(keys)) == len(keys)
+
+
 @pytest.mark.parametrize("memory_size,obs_dim,groups", [(7, 3, None), (33, 5, [[0, 1, 2], [3, 4]]),
                                                          (4096, 10, [range(8), range(8, 10)])])
 def test_memory_arrays_are_disjoint_and_initialised(memory_size, obs_dim, groups):
