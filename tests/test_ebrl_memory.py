@@ -103,12 +103,13 @@ def test_forgetting_takes_the_first_of_equal_reliabilities():
 
 
 def _first_least(rel, size):
-    """Forgetting's choice as the plain scan makes it (2.1, the first on ties)."""
-    found = 0
-    for m in range(1, size):
-        if rel[m] < rel[found]:
-            found = m
-    return found
+    """Forgetting's choice by its definition (2.1, the first on ties), as the plain scan
+    made it: the first element holding the least value that is not NaN; 0 when the
+    first element is NaN (the scan compares the others with it and none is less)."""
+    values = rel[:size]
+    if np.isnan(values[0]):
+        return 0
+    return int(np.flatnonzero(values == np.nanmin(values))[0])
 
 
 def test_least_reliable_by_blocks_is_the_plain_scan_at_every_edge():
