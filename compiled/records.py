@@ -98,5 +98,6 @@ def direct(function, *args):
     cache or compiled, as a first call would. The caller must pass arguments of exactly
     these types from then on: nothing checks them again (an array of another dtype,
     layout or dimension would be read as one of these). numba's public
-    ``Dispatcher.compile`` returns that version's entry point."""
+    ``Dispatcher.compile(signature)`` loads or compiles the version and returns its entry
+    point, which a call through the dispatcher runs after typing the arguments."""
     return function.compile(tuple(numba.typeof(a) for a in args))

@@ -240,6 +240,14 @@ def policy(table, table_w, utility, threshold):
     return best if best_measure > threshold else -1
 
 
+#: least_reliable's block: its least key is taken over this many elements at a time.
+LEAST_BLOCK = 64
+#: The bits of a float64 below its sign, as an int64 (ordered_key's mask).
+_MAGNITUDE = 0x7FFFFFFFFFFFFFFF
+#: The largest int64: no key is above it.
+_LARGEST_KEY = np.iinfo(np.int64).max
+
+
 @njit(cache=True)
 def least_reliable(rel, size):
     """The element of lowest reliability, the first on ties (forgetting, 2.1): the answer
@@ -277,14 +285,6 @@ def least_reliable(rel, size):
                 if rel[m] == value:
                     return m
     return 0  # not reached: block `best` holds the value
-
-
-#: least_reliable's block: its least key is taken over this many elements at a time.
-LEAST_BLOCK = 64
-#: The bits of a float64 below its sign, as an int64.
-_MAGNITUDE = 0x7FFFFFFFFFFFFFFF
-#: The largest int64: no key is above it.
-_LARGEST_KEY = 0x7FFFFFFFFFFFFFFF
 
 
 @njit(cache=True)
