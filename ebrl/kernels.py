@@ -265,17 +265,16 @@ def least_reliable(rel, size):
     bits = rel[:size].view(np.int64)
     blocks = -(-size // LEAST_BLOCK)
     lows = np.empty(blocks, dtype=np.int64)
+    best, best_key = 0, _LARGEST_KEY  # the first block of the least key
     for b in range(blocks):
         low = _LARGEST_KEY
         for m in range(b * LEAST_BLOCK, min(size, (b + 1) * LEAST_BLOCK)):
             key = ordered_key(bits[m])
             low = key if key < low else low
         lows[b] = ordered_key(low)  # a key is its own inverse: the block's least bits
+        if low < best_key:
+            best, best_key = b, low
     least = lows.view(np.float64)
-    best = 0
-    for b in range(1, blocks):
-        if ordered_key(lows[b]) < ordered_key(lows[best]):
-            best = b
     value = least[best]
     if value != value:  # a NaN of negative sign
         return _least_by_scan(rel, size)
