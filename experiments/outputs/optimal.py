@@ -15,6 +15,7 @@ Steps under each robot's action limits, noise-free:
   stopping at every corner, a leg of L units takes 2 ceil(sqrt(L / a)) steps
   (accelerate then brake), a feasible plan. Ramming walls to stop lies in between.
 """
+import functools
 import heapq
 import math
 
@@ -96,7 +97,19 @@ def segment_box_distances(p, qs, boxes):
 
 
 def shortest_path(start, field, obstacles, goal, radius):
-    """(length, points) of the shortest path of a disc of `radius` from start into goal."""
+    """(length, points) of the shortest path of a disc of `radius` from start into goal.
+    Kept per process for each room and radius (`_shortest`): every report on a robot in a
+    room asks for the same path, and a process that builds many reports (a study, the
+    test suite) searched it again at each (0.1-0.3 s a robot)."""
+    length, points = _shortest(tuple(map(float, start)), tuple(map(float, field)),
+                               tuple(tuple(map(float, box)) for box in obstacles),
+                               tuple(map(float, goal)), float(radius))
+    return length, points.copy()
+
+
+@functools.lru_cache(maxsize=64)
+def _shortest(start, field, obstacles, goal, radius):
+    """shortest_path's search, on hashable arguments (tuples of floats)."""
     fx0, fx1, fy0, fy1 = field[0] + radius, field[1] - radius, field[2] + radius, field[3] - radius
     eps = 1e-6
     start = np.asarray(start, dtype=float)
