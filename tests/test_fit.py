@@ -134,9 +134,10 @@ def test_a_tiny_study_runs_resumes_and_reaches_the_runs(tmp_path):
 
     # A kill mid-trial leaves it running in the storage: the next call fails it and asks
     # its readings again first, reusing its runs. Asked by the sampler a batch starting
-    # here would use (seeded): Optuna's unseeded default drew, one run in a few hundred,
-    # bump=bounce with thrust=demand, whose speed no wall bounds (tasks/readings.py), and
-    # its robot went through a wall: a failed trial, not the resume under test.
+    # here would use (seeded): Optuna's unseeded default drew now and then (2 of 80
+    # random draws) bump=bounce with thrust=demand, whose speed no wall bounds
+    # (docs/failures.md), and its robot went through a wall: a failed trial, not the
+    # resume under test.
     import optuna
     s = optuna.load_study(study_name="fit", storage=study.storage_url(None, out))
     s.sampler = storage.tpe(0, len(s.trials))
