@@ -10,7 +10,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 DEMO_OUT ?= demo_results
 
-.PHONY: demo lint test test-fast bench clean lock docs
+.PHONY: demo lint test test-fast bench clean lock docs wheel-check
 
 # The venv, with uv in it (pinned; pip installs it): uv installs the locks, about 10 s on a
 # fresh machine where pip took 30-50 s (it fetches in parallel and links from its cache;
@@ -95,6 +95,13 @@ docs: $(VENV)/.installed-test
 
 bench: $(VENV)/.installed
 	$(BIN)/ebrl bench
+
+# The wheel a user installs (pip install .), built from the tracked files into a fresh
+# virtual environment with the locks' packages: every module imported, ebrl --help, ebrl
+# robots and a short ebrl run from it (experiments/ops/wheel.py; make test does all but
+# the run, whose kernels compile anew there: about 40 s).
+wheel-check: $(VENV)/.installed
+	$(BIN)/python -m experiments.ops.wheel --run
 
 clean:
 	rm -rf $(VENV) $(DEMO_OUT) .pytest_cache site
