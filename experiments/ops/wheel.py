@@ -13,6 +13,7 @@ and the run is this command's. A wheel once lacked `tasks.realisations` and
 hid it. One line on success; a failure raises with the failing step's output.
 """
 import argparse
+import json
 import pathlib
 import shutil
 import subprocess
@@ -106,7 +107,6 @@ def check(folder, run=False):
     wheel = build(tracked_copy(folder / "source"), folder / "dist")
     python, site = install(wheel, folder / "venv")
     names = modules(wheel)
-    import json
     out = _run([python, "-c", _CHECK, site, json.dumps(names)], cwd=folder,
                env=dict(CLEAN_ENV, HOME=str(folder))).stdout.split()
     if out != ["eq8", "eq9-10"]:
