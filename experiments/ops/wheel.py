@@ -107,12 +107,11 @@ def check(folder, run=False):
     wheel = build(tracked_copy(folder / "source"), folder / "dist")
     python, site = install(wheel, folder / "venv")
     names = modules(wheel)
-    out = _run([python, "-c", _CHECK, site, json.dumps(names)], cwd=folder,
-               env=dict(CLEAN_ENV, HOME=str(folder))).stdout.split()
-    if out != ["eq8", "eq9-10"]:
-        raise RuntimeError(f"the behaviours by name gave {out}")
-    ebrl = python.parent / "ebrl"
     env = dict(CLEAN_ENV, HOME=str(folder))
+    found = _run([python, "-c", _CHECK, site, json.dumps(names)], cwd=folder, env=env).stdout
+    if found.split() != ["eq8", "eq9-10"]:
+        raise RuntimeError(f"the behaviours by name gave {found.split()}")
+    ebrl = python.parent / "ebrl"
     if not _run([ebrl, "--help"], cwd=folder, env=env).stdout.startswith("usage: ebrl"):
         raise RuntimeError("ebrl --help printed no usage")
     if "two_wheel" not in _run([ebrl, "robots"], cwd=folder, env=env).stdout:
@@ -120,11 +119,11 @@ def check(folder, run=False):
     said = (f"{wheel.name} in a fresh virtual environment: {len(names)} modules imported, "
             "ebrl --help and ebrl robots run")
     if run:
-        out = folder / "results"
+        results = folder / "results"
         _run([ebrl, "run", "--robot", "two_wheel", "--condition", "random", "--seeds", "0",
-              "--steps", "20", "--workers", "1", "--no-progress", "--out", out], cwd=folder,
-             env=env)
-        if not (out / "two_wheel" / "random" / "seed_000" / "run.json").is_file():
+              "--steps", "20", "--workers", "1", "--no-progress", "--out", results],
+             cwd=folder, env=env)
+        if not (results / "two_wheel" / "random" / "seed_000" / "run.json").is_file():
             raise RuntimeError("ebrl run wrote no run.json")
         said += ", a short ebrl run made"
     return said
