@@ -21,9 +21,9 @@ import sys
 import tempfile
 import time
 
+from experiments import ROOT
 from experiments.ops import procs
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]  # the checkout: `python -m experiments` from there
 
 
 def _workers_of(pid, min_cpu):

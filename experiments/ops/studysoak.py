@@ -23,9 +23,9 @@ import subprocess
 import sys
 import tempfile
 import time
+from experiments import ROOT
 from experiments.ops import pgserver
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
 def _command(args, out, url):

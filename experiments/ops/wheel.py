@@ -23,7 +23,7 @@ import tempfile
 import venv
 import zipfile
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+from experiments import ROOT
 
 #: What the wheel's environment runs in the checks: its own and nothing of this shell's
 #: (no PYTHONPATH, no editable install, no user site).

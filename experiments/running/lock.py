@@ -10,7 +10,8 @@ import json
 import pathlib
 import re
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+from experiments import ROOT
+
 LOCK = ROOT / "requirements.lock"
 #: A pinned line of a lock: name==version, then an environment marker after ';'.
 _PIN = re.compile(r"^([A-Za-z0-9][A-Za-z0-9._-]*)==([^\s;\\]+)\s*(?:;\s*([^\\]+?))?\s*\\?$")
